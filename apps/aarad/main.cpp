@@ -1,0 +1,28 @@
+// aarad: the command-line program. Each sub-command lives in its own cmd_*.cpp and registers itself here.
+#include "apps/aarad/commands.h"
+
+#include "core/error.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+int main(int argc, char** argv) {
+  CLI::App app{"aarad: progressive-refinement radiosity with anti-aliased hemicubes"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "aarad 0.1.0");
+  aarad::app::add_commands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);  // usage errors exit 2 (CLI11 convention for wrong arguments is non-zero)
+  } catch (const aarad::Error& e) {
+    std::fprintf(stderr, "aarad: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "aarad: internal error: %s\n", e.what());
+    return 3;
+  }
+  return aarad::app::exit_code();
+}

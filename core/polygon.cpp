@@ -1,0 +1,122 @@
+#include "core/polygon.h"
+
+#include "core/predicates.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace aarad {
+
+Vec3 vector_area(std::span<const Vec3> polygon) {
+  // Newell's method, relative to the first vertex to keep the products small far from the origin.
+  Vec3 sum(0.0);
+  if (polygon.size() < 3) return sum;
+  const Vec3 o = polygon[0];
+  for (std::size_t i = 1; i + 1 < polygon.size(); ++i) sum += glm::cross(polygon[i] - o, polygon[i + 1] - o);
+  return 0.5 * sum;
+}
+
+double area(std::span<const Vec3> polygon) { return glm::length(vector_area(polygon)); }
+
+Vec3 normal(std::span<const Vec3> polygon) {
+  const Vec3 a = vector_area(polygon);
+  const double len = glm::length(a);
+  return len > 0.0 ? a / len : Vec3(0.0);
+}
+
+Vec3 centroid(std::span<const Vec3> polygon) {
+  if (polygon.empty()) return Vec3(0.0);
+  const Vec3 n = vector_area(polygon);
+  const double twice_area_sq = glm::dot(n, n);
+  const Vec3 o = polygon[0];
+  Vec3 mean(0.0);
+  for (const Vec3& v : polygon) mean += v;
+  mean /= static_cast<double>(polygon.size());
+  if (twice_area_sq == 0.0) return mean;
+  // Fan triangles from the first vertex, weighted by their signed area along the polygon's normal.
+  Vec3 weighted(0.0);
+  double total = 0.0;
+  for (std::size_t i = 1; i + 1 < polygon.size(); ++i) {
+    const double w = glm::dot(glm::cross(polygon[i] - o, polygon[i + 1] - o), n);
+    weighted += w * (o + polygon[i] + polygon[i + 1]) / 3.0;
+    total += w;
+  }
+  return total != 0.0 ? weighted / total : mean;
+}
+
+Plane plane_of(std::span<const Vec3> polygon) {
+  const Vec3 n = normal(polygon);
+  return Plane{n, -glm::dot(n, centroid(polygon))};
+}
+
+double planarity_deviation(std::span<const Vec3> polygon) {
+  const Plane p = plane_of(polygon);
+  double worst = 0.0;
+  for (const Vec3& v : polygon) worst = std::max(worst, std::abs(p.signed_distance(v)));
+  return worst;
+}
+
+double signed_area(std::span<const Vec2> polygon) {
+  if (polygon.size() < 3) return 0.0;
+  const Vec2 o = polygon[0];
+  double sum = 0.0;
+  for (std::size_t i = 1; i + 1 < polygon.size(); ++i) {
+    const Vec2 a = polygon[i] - o, b = polygon[i + 1] - o;
+    sum += a.x * b.y - a.y * b.x;
+  }
+  return 0.5 * sum;
+}
+
+bool is_convex(std::span<const Vec2> polygon) {
+  const std::size_t n = polygon.size();
+  if (n < 3) return false;
+  bool has_positive = false, has_negative = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Sign s = orientation(polygon[i], polygon[(i + 1) % n], polygon[(i + 2) % n]);
+    has_positive |= s == Sign::kPositive;
+    has_negative |= s == Sign::kNegative;
+  }
+  // Turning one way only; a convex polygon also winds once, which simplicity ensures.
+  return has_positive != has_negative && is_simple(polygon);
+}
+
+bool is_simple(std::span<const Vec2> polygon) {
+  const std::size_t n = polygon.size();
+  if (n < 3) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& a = polygon[i];
+    const Vec2& b = polygon[(i + 1) % n];
+    if (a == b) return false;
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const Vec2& c = polygon[j];
+      const Vec2& d = polygon[(j + 1) % n];
+      const bool adjacent = j == i + 1 || (i == 0 && j == n - 1);
+      if (adjacent) {
+        // Adjacent edges share one vertex; they must not fold back over each other.
+        const Vec2& shared = j == i + 1 ? b : a;
+        const Vec2& p = j == i + 1 ? a : b;
+        const Vec2& q = j == i + 1 ? d : c;
+        if (orientation(p, shared, q) == Sign::kZero && glm::dot(p - shared, q - shared) > 0.0) return false;
+        continue;
+      }
+      if (segments_intersect(a, b, c, d)) return false;
+    }
+  }
+  return true;
+}
+
+void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2> out) {
+  // Drop the dominant axis of n; swap the remaining two when needed to keep the winding.
+  const Vec3 a = glm::abs(n);
+  int drop = 2;
+  if (a.x >= a.y && a.x >= a.z) drop = 0;
+  else if (a.y >= a.z) drop = 1;
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  const bool flip = n[drop] < 0.0;
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const Vec3& p = polygon[i];
+    out[i] = flip ? Vec2(p[v], p[u]) : Vec2(p[u], p[v]);
+  }
+}
+
+}  // namespace aarad

@@ -1,0 +1,34 @@
+// Planar polygon utilities. A polygon is a closed loop of vertices without the first repeated.
+#pragma once
+
+#include "core/math.h"
+
+#include <span>
+
+namespace aarad {
+
+// Newell's vector area: half the sum of v_i x v_{i+1}. Its length is the area of a planar polygon and
+// its direction the normal for which the vertices run counter-clockwise.
+Vec3 vector_area(std::span<const Vec3> polygon);
+double area(std::span<const Vec3> polygon);
+// Unit normal (counter-clockwise seen from its tip); (0, 0, 0) for a polygon of zero area.
+Vec3 normal(std::span<const Vec3> polygon);
+// Area centroid of a planar polygon (the vertex mean when the area is zero).
+Vec3 centroid(std::span<const Vec3> polygon);
+// The plane through the centroid with the Newell normal.
+Plane plane_of(std::span<const Vec3> polygon);
+// Largest distance of a vertex from plane_of(polygon).
+double planarity_deviation(std::span<const Vec3> polygon);
+
+// 2D: signed area (positive counter-clockwise, y up), convexity and simplicity. Convexity and simplicity
+// are decided with exact predicates (core/predicates.h), so collinear and touching cases are reported
+// consistently.
+double signed_area(std::span<const Vec2> polygon);
+bool is_convex(std::span<const Vec2> polygon);  // strictly or with collinear vertices; either winding
+bool is_simple(std::span<const Vec2> polygon);  // no two non-adjacent edges touch, adjacent ones meet only at their shared vertex
+
+// Projects a planar 3D polygon onto the coordinate plane most orthogonal to `n`, keeping the winding
+// seen from the tip of n counter-clockwise in 2D.
+void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2> out);
+
+}  // namespace aarad

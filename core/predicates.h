@@ -1,0 +1,24 @@
+// Exact geometric predicates over CGAL's Exact_predicates_inexact_constructions_kernel: decide "which side"
+// exactly, compute "where" in doubles (CGAL's filtered-predicate design).
+#pragma once
+
+#include "core/math.h"
+
+namespace aarad {
+
+enum class Sign : int { kNegative = -1, kZero = 0, kPositive = 1 };
+
+// Sign of the area of triangle (a, b, c): positive when counter-clockwise (y up).
+Sign orientation(const Vec2& a, const Vec2& b, const Vec2& c);
+// Which side of the plane through p, q, r the point s lies on: positive when s sees p, q, r
+// counter-clockwise (s lies on the side the normal (q - p) x (r - p) points to).
+Sign orientation(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+// Side of point s relative to the plane through `origin` with normal `n`: sign of n . (s - origin),
+// evaluated exactly for the given doubles.
+Sign side_of_plane(const Vec3& origin, const Vec3& n, const Vec3& s);
+// Sign of the linear form a . s + d, exactly for the given doubles.
+Sign sign_of_linear(const Vec3& a, double d, const Vec3& s);
+// Whether segments [a, b] and [c, d] share at least one point.
+bool segments_intersect(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d);
+
+}  // namespace aarad

@@ -1,0 +1,93 @@
+// The scene model: groups of planar polygons with materials, grouped into physical surfaces.
+// Import (core/obj_import.h) and the built-in scenes (core/builtin_scenes.h) produce it; the mesh layer
+// meshes its physical surfaces; the solver reads materials through them.
+#pragma once
+
+#include "core/math.h"
+#include "core/rgb.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace aarad {
+
+struct Material {
+  std::string name;
+  Rgb reflectance{0.5};  // rho per channel, each in [0, 1)
+  Rgb emission{0.0};     // emitted radiosity (exitance) per channel, >= 0
+
+  bool emits() const { return emission.max_component() > 0.0; }
+};
+
+// One planar polygon of the scene. Its vertices run counter-clockwise seen from its front side, the side
+// its normal points to and the side that receives and emits light.
+struct Face {
+  std::vector<Vec3> vertices;
+  std::uint32_t group = 0;
+  std::uint32_t material = 0;
+  std::uint32_t surface = 0;  // index into Scene::surfaces
+  int source_line = 0;        // line in the OBJ file, 0 for built-in geometry
+};
+
+// A named OBJ group ("o" or "g"); it holds one or more physical surfaces.
+struct Group {
+  std::string name;
+  std::vector<std::uint32_t> faces;
+  std::vector<std::uint32_t> surfaces;
+};
+
+// The faces of one group that lie in one plane and share one material. Pieces of one physical surface
+// never occlude each other (the paper's identical-z exception, section 3.2.1).
+struct Surface {
+  std::uint32_t group = 0;
+  std::uint32_t material = 0;
+  Plane plane;  // the front side is the lit side
+  std::vector<std::uint32_t> faces;
+  double area = 0.0;
+};
+
+// A pinhole camera for images. vertical_fov is the full vertical angle in radians.
+struct Camera {
+  Vec3 eye{0.0};
+  Vec3 forward{0.0, 0.0, 1.0};  // unit
+  Vec3 up{0.0, 1.0, 0.0};       // unit, orthogonal to forward
+  double vertical_fov = 0.6981317007977318;  // 40 degrees
+};
+
+class Scene {
+ public:
+  std::string name;  // built-in name or the OBJ path
+  std::vector<Material> materials;
+  std::vector<Group> groups;
+  std::vector<Face> faces;
+  std::vector<Surface> surfaces;
+  std::optional<Camera> camera;
+  std::vector<std::string> warnings;  // what import fixed or skipped, each naming file and line
+
+  // Adds a face to group `group` (created on first use) with material index `material`. The face's
+  // surface is assigned by build_surfaces().
+  std::uint32_t add_group(const std::string& group_name);
+  std::uint32_t add_material(const Material& material);
+  void add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line = 0);
+
+  // Groups faces into physical surfaces (same group, same plane within a tolerance relative to the scene
+  // size, same material) and fills Surface::area and Group::surfaces. Call after the last add_face.
+  void build_surfaces();
+
+  // Axis-aligned bounds and their diagonal, the scene's size for relative tolerances and defaults.
+  Vec3 bounds_min() const;
+  Vec3 bounds_max() const;
+  double diagonal() const;
+
+  double total_area() const;
+  const Material& material_of_surface(std::uint32_t surface) const { return materials[surfaces[surface].material]; }
+  // The group named `group_name`, or nullopt.
+  std::optional<std::uint32_t> find_group(const std::string& group_name) const;
+
+  // A camera that frames the scene's bounds from outside, used when the scene has none.
+  Camera fitted_camera(double aspect) const;
+};
+
+}  // namespace aarad

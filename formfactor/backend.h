@@ -1,0 +1,51 @@
+// The form-factor back-end interface: a small virtual class, created by name through a registry
+// (Mitsuba-style plugins). Inner loops stay inside each back end; nothing per pixel is virtual.
+#pragma once
+
+#include "core/math.h"
+#include "formfactor/receiver_view.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace aarad::formfactor {
+
+// The shooting point with a right-handed orthonormal frame: tangent x bitangent = normal.
+struct Shooter {
+  Vec3 centre{0.0};
+  Vec3 normal{0.0, 0.0, 1.0};
+  Vec3 tangent{1.0, 0.0, 0.0};
+  Vec3 bitangent{0.0, 1.0, 0.0};
+
+  // A frame around `normal` (unit) with a deterministic tangent.
+  static Shooter from_normal(const Vec3& centre, const Vec3& normal);
+};
+
+struct BackendOptions {
+  int resolution = 100;  // pixels along the full top face of a hemicube
+};
+
+class FormFactorBackend {
+ public:
+  virtual ~FormFactorBackend() = default;
+
+  virtual std::string_view name() const = 0;
+
+  // For every receiver i in `subset` (all receivers when `subset` is empty), writes to out[i] the form
+  // factor from the differential area at shooter.centre with normal shooter.normal to the part of
+  // receiver i that is visible from there. Every receiver occludes, whether in the subset or not.
+  // out.size() == receivers.size(); entries outside the subset are left untouched.
+  virtual void compute(const Shooter& shooter, const ReceiverView& receivers,
+                       std::span<const std::uint32_t> subset, std::span<double> out) = 0;
+};
+
+// Creates the back end registered as `name` ("aa-hemicube", "hemicube", "analytic"); throws aarad::Error
+// naming the known back ends when there is none, or when the options are out of range.
+std::unique_ptr<FormFactorBackend> make_backend(std::string_view name, const BackendOptions& options = {});
+std::vector<std::string> backend_names();
+
+}  // namespace aarad::formfactor

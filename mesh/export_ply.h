@@ -1,0 +1,23 @@
+// Export of the leaf mesh as binary PLY with vertex colours and per-face properties
+// radiosity_r, radiosity_g, radiosity_b, level, patch (the output contract of ../shared/design.md).
+#pragma once
+
+#include "mesh/hierarchy.h"
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+
+namespace aarad::mesh {
+
+using ToneMap = std::function<std::array<std::uint8_t, 3>(const Rgb&)>;
+
+// node_values is indexed by NodeId (only leaves read): the per-face radiosity. Vertex colours are the
+// display reconstruction of those values through `tone_map`. Written to a temporary name and renamed, so
+// `path` is whole or untouched; throws aarad::Error naming the path on failure.
+void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const ToneMap& tone_map,
+               const std::filesystem::path& path);
+
+}  // namespace aarad::mesh

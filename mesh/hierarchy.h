@@ -1,0 +1,99 @@
+// The patch/element hierarchy: leaf elements of every physical surface in one OpenMesh PolyMesh, the tree
+// of patches and elements in plain arrays (Cohen, Greenberg, Immel and Brock 1986, "An efficient radiosity
+// approach for realistic image synthesis": patches shoot, elements receive).
+//
+// API contract shared by the solver (refine/), the display/export code and the invariant checker.
+// The implementation may add members; it must not change the meaning of these.
+#pragma once
+
+#include "core/math.h"
+#include "core/rgb.h"
+#include "core/scene.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace aarad::mesh {
+
+using NodeId = std::uint32_t;
+inline constexpr NodeId kNoNode = 0xffffffffu;
+
+struct MeshingOptions {
+  double patch_size = 0.0;    // longest patch edge, scene units; 0 picks a default from the scene's size
+  double element_size = 0.0;  // longest initial element edge; 0 picks a default from the scene's size
+  int max_level = 8;          // deepest node level; patches are level 0
+  double min_area = 0.0;      // smallest element a split may create; 0 picks a default from the scene's size
+  bool balance = false;       // keep edge-neighbours within one level of each other
+};
+
+struct SplitResult {
+  bool ok = false;
+  std::string reason;                // why the split was refused, empty when ok
+  std::vector<NodeId> children;      // the four children when ok
+  std::vector<NodeId> also_split;    // nodes split by balancing, each now an inner node
+};
+
+class Hierarchy {
+ public:
+  Hierarchy(const Scene& scene, const MeshingOptions& options);
+  ~Hierarchy();
+  Hierarchy(Hierarchy&&) noexcept;
+  Hierarchy& operator=(Hierarchy&&) noexcept;
+
+  const Scene& scene() const;
+  const MeshingOptions& options() const;  // with defaults resolved
+
+  // Nodes. Patches are the top nodes of each surface (level 0); elements are their descendants.
+  std::size_t node_count() const;
+  std::span<const NodeId> patches() const;
+  NodeId parent(NodeId node) const;              // kNoNode for patches
+  std::span<const NodeId> children(NodeId node) const;  // empty for leaves
+  bool is_leaf(NodeId node) const;
+  int level(NodeId node) const;
+  NodeId patch(NodeId node) const;               // the patch a node belongs to (itself for a patch)
+  std::uint32_t surface(NodeId node) const;      // index into scene().surfaces
+  double area(NodeId node) const;
+  Vec3 centroid(NodeId node) const;
+  const Plane& plane(NodeId node) const;         // the surface's plane
+  // Corners (not hanging vertices) counter-clockwise seen from the front: 3 or 4 points.
+  std::vector<Vec3> corners(NodeId node) const;
+
+  // Radiosity B of every node and unshot radiosity dB (meaningful for patches), per channel.
+  Rgb& radiosity(NodeId node);
+  const Rgb& radiosity(NodeId node) const;
+  Rgb& unshot(NodeId node);
+  const Rgb& unshot(NodeId node) const;
+
+  // Leaves in a deterministic order (by node id). leaf_count() is O(1).
+  std::vector<NodeId> leaves() const;
+  std::size_t leaf_count() const;
+  // Leaves below `node` (the node itself when it is a leaf).
+  std::vector<NodeId> leaves_under(NodeId node) const;
+
+  // Increases whenever the leaf set changes, so callers can cache views of the leaves.
+  std::uint64_t revision() const;
+
+  // Splits leaf `node` into four (quads into four quads, triangles into four triangles). Edge midpoints a
+  // neighbour already made are reused; an unsplit neighbour gains the midpoint as a hanging vertex.
+  // Children inherit the parent's B and unshot 0. Refused (ok = false) when the node is not a leaf, when
+  // its level is max_level, or when a child would be smaller than min_area. With balance on, neighbours
+  // are split first so edge-neighbours differ by at most one level.
+  SplitResult split(NodeId node);
+
+  // Leaves of the same surface that share a piece of an edge with leaf `node`.
+  std::vector<NodeId> edge_neighbours(NodeId node) const;
+
+  // The mesh of leaves; implementation types are in mesh/leaf_mesh.h.
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace aarad::mesh
