@@ -16,7 +16,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);  // usage errors exit 2 (CLI11 convention for wrong arguments is non-zero)
+    // --help and --version exit 0; every usage error exits 2, whatever CLI11's own code for it.
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
   } catch (const aarad::Error& e) {
     std::fprintf(stderr, "aarad: error: %s\n", e.what());
     return 1;
