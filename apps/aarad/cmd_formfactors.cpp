@@ -1,0 +1,127 @@
+// `aarad formfactors SCENE --from GROUP`: point-to-group form factors from the centroid of one planar
+// group, along its normal, through any back end. The report format is the contract of shared/design.md.
+#include "apps/aarad/commands.h"
+
+#include "core/builtin_scenes.h"
+#include "core/error.h"
+#include "core/polygon.h"
+#include "formfactor/backend.h"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace aarad::app {
+namespace {
+
+struct FormFactorsOptions {
+  std::string scene;
+  std::string from;
+  std::string method = "aa-hemicube";
+  int resolution = 100;
+  bool json = false;
+};
+
+// The shooting point: the area centroid of the group's faces, which must all lie in one physical surface.
+formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_index) {
+  const Group& group = scene.groups[group_index];
+  if (group.surfaces.size() != 1) {
+    throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in " +
+                std::to_string(group.surfaces.size()) + " planes; pick a planar group");
+  }
+  const Surface& surface = scene.surfaces[group.surfaces.front()];
+  Vec3 weighted(0.0);
+  double total = 0.0;
+  for (std::uint32_t f : surface.faces) {
+    const double a = area(scene.faces[f].vertices);
+    weighted += a * centroid(scene.faces[f].vertices);
+    total += a;
+  }
+  if (!(total > 0.0)) throw Error("group '" + group.name + "' has zero area; pick a group with a real face");
+  return formfactor::Shooter::from_normal(weighted / total, surface.plane.normal);
+}
+
+void run_formfactors(const FormFactorsOptions& options) {
+  const Scene scene = load_scene(options.scene);
+  const std::optional<std::uint32_t> from = scene.find_group(options.from);
+  if (!from) {
+    std::string known;
+    for (const Group& g : scene.groups) known += (known.empty() ? "" : ", ") + g.name;
+    throw Error("scene '" + scene.name + "' has no group '" + options.from + "'; its groups are: " + known);
+  }
+  const formfactor::Shooter shooter = shooter_of_group(scene, *from);
+  const std::unique_ptr<formfactor::FormFactorBackend> backend =
+      formfactor::make_backend(options.method, {.resolution = options.resolution});
+
+  // Every face of every other group is one receiver; a face's patch is itself.
+  formfactor::ReceiverView receivers;
+  std::vector<std::uint32_t> receiver_group;
+  for (std::uint32_t f = 0; f < scene.faces.size(); ++f) {
+    const Face& face = scene.faces[f];
+    if (face.group == *from) continue;
+    receivers.add(face.vertices, scene.surfaces[face.surface].plane, face.surface, f);
+    receiver_group.push_back(face.group);
+  }
+  std::vector<double> factors(receivers.size(), 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  backend->compute(shooter, receivers, {}, factors);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<double> per_group(scene.groups.size(), 0.0);
+  for (std::size_t i = 0; i < factors.size(); ++i) per_group[receiver_group[i]] += factors[i];
+  double total = 0.0;
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  for (std::uint32_t g = 0; g < scene.groups.size(); ++g) {
+    if (g == *from) continue;
+    total += per_group[g];
+    rows.push_back({{"name", scene.groups[g].name}, {"form_factor", per_group[g]}});
+  }
+
+  if (options.json) {
+    nlohmann::ordered_json report = {
+        {"from", options.from},
+        {"point", {shooter.centre.x, shooter.centre.y, shooter.centre.z}},
+        {"normal", {shooter.normal.x, shooter.normal.y, shooter.normal.z}},
+        {"method", std::string(backend->name())},
+        {"resolution", options.resolution},
+        {"total", total},
+        {"seconds", seconds},
+        {"receivers", rows},
+    };
+    std::cout << report.dump() << '\n';
+    return;
+  }
+  std::printf("form factors from '%s' of %s\n", options.from.c_str(), scene.name.c_str());
+  std::printf("  point  (%.6g, %.6g, %.6g)\n", shooter.centre.x, shooter.centre.y, shooter.centre.z);
+  std::printf("  normal (%.6g, %.6g, %.6g)\n", shooter.normal.x, shooter.normal.y, shooter.normal.z);
+  std::printf("  method %s, resolution %d, %.3f ms\n\n", std::string(backend->name()).c_str(), options.resolution,
+              seconds * 1e3);
+  std::printf("  %-24s %14s\n", "group", "form factor");
+  for (const auto& row : rows) {
+    std::printf("  %-24s %14.8f\n", row["name"].get<std::string>().c_str(), row["form_factor"].get<double>());
+  }
+  std::printf("  %-24s %14.8f\n", "total", total);
+}
+
+}  // namespace
+
+void add_formfactors_command(CLI::App& app) {
+  auto options = std::make_shared<FormFactorsOptions>();
+  CLI::App* cmd = app.add_subcommand("formfactors", "Form factors from the centroid of one group to every other group");
+  cmd->add_option("scene", options->scene, "Built-in scene name (cornell, office, furnace) or OBJ file")->required();
+  cmd->add_option("--from", options->from, "Group to shoot from: one planar polygon")->required();
+  cmd->add_option("--ff", options->method, "Form-factor back end: aa-hemicube, hemicube or analytic")
+      ->capture_default_str();
+  cmd->add_option("--resolution", options->resolution, "Hemicube pixels along the full top face [2, 8192]")
+      ->capture_default_str();
+  cmd->add_flag("--json", options->json, "Print the report as one JSON object on stdout");
+  cmd->callback([options] { run_formfactors(*options); });
+}
+
+}  // namespace aarad::app
