@@ -1,0 +1,241 @@
+// `aarad solve [SCENE]`: progressive-refinement radiosity with adaptive substructuring (refine/solver.h),
+// progress on stderr, Ctrl-C to stop after the current shot, and the output files of ../shared/design.md.
+// Exit codes (docs/solver.md): 0 converged or stopped at --max-shots, 1 bad input, 2 usage, 130 interrupted.
+#include "apps/aarad/commands.h"
+
+#include "core/builtin_scenes.h"
+#include "core/error.h"
+#include "mesh/invariants.h"
+#include "refine/output.h"
+#include "refine/report.h"
+#include "refine/solver.h"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unistd.h>
+
+namespace aarad::app {
+namespace {
+
+std::atomic<bool> g_interrupt_requested{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the SIGINT handler needs a lock-free flag");
+
+extern "C" void on_sigint(int) { g_interrupt_requested.store(true); }
+
+// Installs the SIGINT handler for its lifetime. SA_RESETHAND: a second Ctrl-C ends the program at once.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    g_interrupt_requested.store(false);
+    struct sigaction action {};
+    action.sa_handler = on_sigint;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    sigaction(SIGINT, &action, &previous_);
+  }
+  ~InterruptGuard() { sigaction(SIGINT, &previous_, nullptr); }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+ private:
+  struct sigaction previous_ {};
+};
+
+struct SolveCommandOptions {
+  std::string scene = "cornell";
+  std::string out;
+  bool json = false;
+  bool quiet = false;
+  int threads = 0;
+  int width = 512;
+  int height = 512;
+  refine::SolverOptions solver;
+  // Meshing options given on the command line (otherwise refine::default_meshing for the scene).
+  std::optional<double> patch_size, element_size, min_area;
+  std::optional<int> max_level;
+  bool balance = false;
+};
+
+// Progress on stderr: a bar rewritten in place on a terminal, a plain line every few seconds otherwise.
+class ProgressPrinter {
+ public:
+  ProgressPrinter(bool enabled, double converge)
+      : enabled_(enabled), terminal_(::isatty(STDERR_FILENO) == 1), converge_(converge) {}
+
+  void update(const refine::Progress& p) {
+    if (!enabled_) return;
+    if (terminal_) {
+      if (printed_ && p.seconds - last_ < 0.1) return;
+      // Fill: progress towards --converge on a log scale (unshot falls about geometrically).
+      double fill = 1.0;
+      if (converge_ > 0.0 && converge_ < 1.0 && p.unshot_fraction > 0.0) {
+        fill = std::clamp(std::log(p.unshot_fraction) / std::log(converge_), 0.0, 1.0);
+      }
+      constexpr int kWidth = 24;
+      const int filled = static_cast<int>(std::lround(fill * kWidth));
+      std::string bar(static_cast<std::size_t>(filled), '#');
+      bar.append(static_cast<std::size_t>(kWidth - filled), '.');
+      std::fprintf(stderr, "\r[%s] shot %lld  unshot %.3f %%  %zu elements  %.1f s ", bar.c_str(),
+                   static_cast<long long>(p.shots), 100.0 * p.unshot_fraction, p.elements, p.seconds);
+    } else {
+      if (printed_ && p.seconds - last_ < 2.0) return;
+      std::fprintf(stderr, "aarad: shot %lld, unshot %.3f %%, %zu elements, %.1f s\n",
+                   static_cast<long long>(p.shots), 100.0 * p.unshot_fraction, p.elements, p.seconds);
+    }
+    std::fflush(stderr);
+    printed_ = true;
+    last_ = p.seconds;
+  }
+
+  void finish() {
+    if (enabled_ && terminal_ && printed_) std::fputc('\n', stderr);
+  }
+
+ private:
+  bool enabled_;
+  bool terminal_;
+  double converge_;
+  bool printed_ = false;
+  double last_ = 0.0;
+};
+
+std::string default_out_directory(const Scene& scene) {
+  std::string name = std::filesystem::path(scene.name).stem().string();
+  if (name.empty()) name = "scene";
+  return (std::filesystem::path("out") / name).string();
+}
+
+void run_solve(SolveCommandOptions options) {
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<tbb::global_control> threads;
+  if (options.threads > 0) {
+    threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
+  }
+
+  const Scene scene = load_scene(options.scene);
+  for (const std::string& warning : scene.warnings) {
+    if (!options.quiet) std::fprintf(stderr, "aarad: warning: %s\n", warning.c_str());
+  }
+  refine::SolverOptions solver_options = options.solver;
+  solver_options.meshing = refine::default_meshing(scene);
+  if (options.patch_size) solver_options.meshing.patch_size = *options.patch_size;
+  if (options.element_size) solver_options.meshing.element_size = *options.element_size;
+  if (options.min_area) solver_options.meshing.min_area = *options.min_area;
+  if (options.max_level) solver_options.meshing.max_level = *options.max_level;
+  solver_options.meshing.balance = options.balance;
+  const std::filesystem::path out = options.out.empty() ? default_out_directory(scene) : options.out;
+
+  refine::Solver solver(scene, solver_options);
+  const bool show_progress = !options.quiet;
+  if (show_progress) {
+    std::fprintf(stderr, "aarad: %s: %zu patches, %zu elements; %s at resolution %d\n", scene.name.c_str(),
+                 solver.hierarchy().patches().size(), solver.hierarchy().leaf_count(),
+                 std::string(solver.backend().name()).c_str(), solver_options.resolution);
+  }
+
+  ProgressPrinter printer(show_progress, solver_options.converge);
+  {
+    InterruptGuard guard;
+    solver.run([&](const refine::Progress& progress) {
+      printer.update(progress);
+      return !g_interrupt_requested.load();
+    });
+    printer.finish();
+    if (solver.interrupted() && !options.quiet) {
+      std::fprintf(stderr, "aarad: interrupted after %lld shots; writing the solution so far\n",
+                   static_cast<long long>(solver.shots()));
+    }
+
+    const std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
+    for (const mesh::Violation& v : violations) {
+      std::fprintf(stderr, "aarad: warning: invariant %s violated: %s\n", v.invariant.c_str(), v.message.c_str());
+    }
+    const refine::OutputResult files =
+        refine::write_solution_files(solver, out, {.width = options.width, .height = options.height});
+    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const nlohmann::json report = refine::make_report(solver, violations, {.total = total, .output = files.seconds});
+    refine::write_report(report, out / "report.json");
+
+    if (options.json) std::cout << report.dump() << '\n' << std::flush;
+    if (!options.quiet) {
+      std::FILE* summary = options.json ? stderr : stdout;
+      const char* state = solver.converged()     ? "converged"
+                          : solver.interrupted() ? "interrupted"
+                                                 : "stopped at --max-shots";
+      std::fprintf(summary, "aarad: %s after %lld shots (unshot %.3f %%), %zu elements, max level %d, %.2f s\n",
+                   state, static_cast<long long>(solver.shots()), 100.0 * solver.unshot_fraction(),
+                   solver.hierarchy().leaf_count(), solver.max_leaf_level(), total);
+      std::fprintf(summary,
+                   "aarad: wrote %s/: mesh.ply flat.png smooth.png mesh.png radiosity.exr report.json\n",
+                   out.string().c_str());
+      std::fflush(summary);
+    }
+  }
+  set_exit_code(solver.interrupted() ? 130 : 0);
+}
+
+}  // namespace
+
+void add_solve_command(CLI::App& app) {
+  auto options = std::make_shared<SolveCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "solve", "Progressive-refinement radiosity with adaptive substructuring; writes mesh, images and report");
+  cmd->add_option("scene", options->scene, "Built-in scene (cornell, office, furnace) or OBJ file")
+      ->capture_default_str();
+  cmd->add_option("--ff", options->solver.backend, "Form-factor back end: aa-hemicube, hemicube, analytic")
+      ->capture_default_str();
+  cmd->add_option("--resolution", options->solver.resolution, "Hemicube pixels along the full top face")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_option("--converge", options->solver.converge, "Stop when unshot flux < this x emitted flux")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--max-shots", options->solver.max_shots, "Stop after this many shots")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_flag("--adaptive,!--no-adaptive", options->solver.adaptive,
+                "Adaptive substructuring on radiosity gradients (default on)");
+  cmd->add_option("--gradient", options->solver.gradient,
+                  "Split when neighbours' luminance differs by more than this x the largest reflected radiosity")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
+      ->check(CLI::Range(0, 30));
+  cmd->add_option("--min-area", options->min_area, "Smallest element a split may create, scene units^2")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--patch-size", options->patch_size, "Longest patch edge, scene units")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--element-size", options->element_size, "Longest initial element edge, scene units")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--balance", options->balance, "Keep edge-neighbours within one level of each other");
+  cmd->add_option("--shooter-samples", options->solver.shooter_samples,
+                  "Gauss points per direction on the shooting patch (1: its centroid, as the paper)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  cmd->add_option("--threads", options->threads, "Worker threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--out", options->out, "Output directory (default out/<scene name>)");
+  cmd->add_option("--width", options->width, "Image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
+  cmd->add_option("--height", options->height, "Image height in pixels")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  cmd->add_flag("--json", options->json, "Print the report as one JSON object on stdout, nothing else there");
+  cmd->add_flag("--quiet", options->quiet, "No progress or summary on stderr/stdout");
+  cmd->callback([options] { run_solve(*options); });
+}
+
+}  // namespace aarad::app

@@ -1,0 +1,82 @@
+// Output files of a solve; see output.h and docs/solver.md for the tone map and what each image shows.
+#include "refine/output.h"
+
+#include "core/error.h"
+#include "mesh/display.h"
+#include "mesh/export_ply.h"
+#include "refine/render.h"
+
+#include <chrono>
+#include <fstream>
+#include <system_error>
+
+namespace aarad::refine {
+
+ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) {
+  const mesh::Hierarchy& hierarchy = solver.hierarchy();
+  std::vector<Rgb> values;
+  std::vector<double> areas;
+  for (mesh::NodeId leaf : hierarchy.leaves()) {
+    values.push_back(displayed[leaf]);
+    areas.push_back(hierarchy.area(leaf));
+  }
+  return ToneMap::from_percentile(values, areas, 0.99);
+}
+
+OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,
+                                  const OutputOptions& options) {
+  namespace fs = std::filesystem;
+  const auto start = std::chrono::steady_clock::now();
+  if (options.width < 1 || options.height < 1) throw Error("image size must be at least 1 x 1");
+  std::error_code error;
+  fs::create_directories(directory, error);
+  if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
+
+  const mesh::Hierarchy& hierarchy = solver.hierarchy();
+  const std::vector<Rgb> radiosity = solver.radiosity();
+  const std::vector<Rgb> displayed = solver.displayed_radiosity();
+  OutputResult result;
+  result.tone_map = solution_tone_map(solver, displayed);
+  const ToneMap map = result.tone_map;
+
+  // The PLY carries the solution B (no ambient term); its vertex colours use the images' tone map.
+  const fs::path ply = directory / "mesh.ply";
+  mesh::write_ply(hierarchy, radiosity, [map](const Rgb& value) { return map(value); }, ply);
+  result.files.push_back(ply);
+
+  const Scene& scene = solver.scene();
+  const double aspect = static_cast<double>(options.width) / options.height;
+  const Camera camera = scene.camera ? *scene.camera : scene.fitted_camera(aspect);
+  const mesh::DisplayMesh display = mesh::build_display_mesh(hierarchy, displayed);
+
+  const Rendering flat = render(display, displayed, camera, options.width, options.height, Shading::kFlat);
+  const Image8 flat_display = tone_map(flat.image, map);
+  write_png(flat_display, directory / "flat.png");
+  result.files.push_back(directory / "flat.png");
+
+  const Rendering smooth = render(display, displayed, camera, options.width, options.height, Shading::kSmooth);
+  write_png(tone_map(smooth.image, map), directory / "smooth.png");
+  result.files.push_back(directory / "smooth.png");
+
+  Image8 with_edges = flat_display;
+  draw_leaf_edges(with_edges, flat.leaf);
+  write_png(with_edges, directory / "mesh.png");
+  result.files.push_back(directory / "mesh.png");
+
+  write_exr(flat.image, directory / "radiosity.exr");
+  result.files.push_back(directory / "radiosity.exr");
+
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+void write_report(const nlohmann::json& report, const std::filesystem::path& path) {
+  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << report.dump(2) << '\n';
+    out.close();
+    if (!out) throw Error("cannot write " + path.string());
+  });
+}
+
+}  // namespace aarad::refine

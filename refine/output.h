@@ -1,0 +1,39 @@
+// The files of a solve (../shared/design.md): DIR/mesh.ply, flat.png, smooth.png, mesh.png, radiosity.exr and
+// report.json, each written under a temporary name and renamed, so each is whole or absent.
+#pragma once
+
+#include "core/image.h"
+#include "refine/solver.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace aarad::refine {
+
+struct OutputOptions {
+  int width = 512;
+  int height = 512;
+};
+
+struct OutputResult {
+  ToneMap tone_map;                          // the exposure used for the PNGs and the PLY's vertex colours
+  std::vector<std::filesystem::path> files;  // in the order written
+  double seconds = 0.0;
+};
+
+// The tone map of the images: exposure maps the 99th area-weighted percentile of the leaves' displayed
+// max(r, g, b) to 1 (docs/solver.md).
+ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed);
+
+// Writes mesh.ply, flat.png, smooth.png, mesh.png and radiosity.exr into `directory` (created when missing),
+// from the scene's camera or, without one, Scene::fitted_camera. Throws aarad::Error naming the file on failure.
+OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,
+                                  const OutputOptions& options = {});
+
+// Writes `report` (indented JSON and a newline) to `path` atomically.
+void write_report(const nlohmann::json& report, const std::filesystem::path& path);
+
+}  // namespace aarad::refine

@@ -1,0 +1,34 @@
+// A small software renderer for the solution: the display triangles (mesh/display.h) rasterized from a
+// pinhole camera with a z-buffer, back faces culled (so a closed room seen from outside shows its inside).
+// Pixel centres are sampled; depth and the interpolated values are perspective-correct.
+//   flat   each triangle takes its leaf element's value as is (like the paper's figures);
+//   smooth the display mesh's vertex values interpolated across each triangle;
+//   mesh   (draw_leaf_edges) the boundaries between leaf elements drawn over a tone-mapped flat image, found
+//          where the per-pixel leaf id changes, so hidden edges never show.
+#pragma once
+
+#include "core/image.h"
+#include "core/scene.h"
+#include "mesh/display.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace aarad::refine {
+
+enum class Shading { kFlat, kSmooth };
+
+struct Rendering {
+  Image image;                    // linear values, black where nothing is seen
+  std::vector<mesh::NodeId> leaf;  // per pixel, the leaf element seen (mesh::kNoNode for background)
+};
+
+// node_values (indexed by NodeId, leaves read) colour flat triangles; display.vertex_values colour smooth ones.
+Rendering render(const mesh::DisplayMesh& display, std::span<const Rgb> node_values, const Camera& camera,
+                 int width, int height, Shading shading);
+
+// Draws one-pixel lines where the leaf id of a pixel differs from its right or lower neighbour's: dark lines
+// over bright pixels, light lines over dark ones.
+void draw_leaf_edges(Image8& image, const std::vector<mesh::NodeId>& leaf);
+
+}  // namespace aarad::refine

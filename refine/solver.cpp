@@ -1,0 +1,420 @@
+// Progressive-refinement radiosity (Cohen, Chen, Wallace and Greenberg 1988, section 3) with adaptive
+// substructuring (Cohen, Greenberg, Immel and Brock 1986, section 3): the loop of ../shared/references.md.
+//
+// One shot: the patch s with the largest unshot flux dB_s A_s (summed over the three channels) shoots from its
+// centroid; every leaf element e on patch j not in s's plane receives the incident flux dB_s F(s->e) A_s per
+// channel, of which rho_j reflects: B_e += rho_j dB_s F A_s / A_e and dB_j += rho_j dB_s F A_s / A_j; the rest
+// is absorbed. Then dB_s = 0.
+// Substructuring after the shot: a leaf whose radiosity luminance differs from an edge-neighbour's by more than
+// `gradient` times the largest reflected luminance (B - E) is split; its new leaves drop the parent's share of
+// this shot (they inherited the parent's B), get their own share from the back end (subset = new leaves, all
+// receivers occluding), and the patch's unshot radiosity and the absorbed flux are corrected the same way.
+// The new leaves are tested again until nothing splits.
+#include "refine/solver.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <set>
+
+namespace aarad::refine {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Gauss-Legendre nodes and weights on [0, 1] (Newton iteration on P_n; Numerical Recipes, section 4.6).
+void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
+  nodes.assign(static_cast<std::size_t>(n), 0.0);
+  weights.assign(static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    double x = std::cos(kPi * (i + 0.75) / (n + 0.5));
+    double derivative = 1.0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      double p0 = 1.0, p1 = 0.0;
+      for (int k = 1; k <= n; ++k) {
+        const double p2 = p1;
+        p1 = p0;
+        p0 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p2) / k;
+      }
+      derivative = n * (x * p0 - p1) / (x * x - 1.0);
+      const double step = p0 / derivative;
+      x -= step;
+      if (std::abs(step) < 1e-15) break;
+    }
+    nodes[static_cast<std::size_t>(i)] = 0.5 * (1.0 - x);
+    weights[static_cast<std::size_t>(i)] = 1.0 / ((1.0 - x * x) * derivative * derivative);  // = w / 2
+  }
+}
+
+struct SamplePoint {
+  Vec3 position;
+  double weight;  // fraction of the patch's area; the weights sum to 1
+};
+
+// n x n quadrature points over a triangle (collapsed square) or a quadrilateral (bilinear map).
+std::vector<SamplePoint> patch_samples(const std::vector<Vec3>& corners, int n) {
+  std::vector<double> nodes, weights;
+  gauss_legendre(n, nodes, weights);
+  std::vector<SamplePoint> samples;
+  double total = 0.0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double u = nodes[static_cast<std::size_t>(i)];
+      const double v = nodes[static_cast<std::size_t>(j)];
+      const double w = weights[static_cast<std::size_t>(i)] * weights[static_cast<std::size_t>(j)];
+      Vec3 p;
+      double jacobian;
+      if (corners.size() == 3) {
+        p = corners[0] + u * (corners[1] - corners[0]) + u * v * (corners[2] - corners[1]);
+        jacobian = u * glm::length(glm::cross(corners[1] - corners[0], corners[2] - corners[1]));
+      } else {
+        p = (1 - u) * (1 - v) * corners[0] + u * (1 - v) * corners[1] + u * v * corners[2] + (1 - u) * v * corners[3];
+        const Vec3 du = (1 - v) * (corners[1] - corners[0]) + v * (corners[2] - corners[3]);
+        const Vec3 dv = (1 - u) * (corners[3] - corners[0]) + u * (corners[2] - corners[1]);
+        jacobian = glm::length(glm::cross(du, dv));
+      }
+      samples.push_back({p, w * jacobian});
+      total += w * jacobian;
+    }
+  }
+  if (total > 0.0) {
+    for (SamplePoint& s : samples) s.weight /= total;
+  }
+  return samples;
+}
+
+}  // namespace
+
+mesh::MeshingOptions default_meshing(const Scene& scene) {
+  mesh::MeshingOptions options;
+  if (scene.name == "cornell") {
+    // Millimetres. About 230 patches and 700 initial elements (see docs/solver.md).
+    options.patch_size = 140.0;
+    options.element_size = 70.0;
+    options.min_area = 60.0;
+  } else if (scene.name == "office") {
+    // Sizes chosen so the built-in office meshes to about the paper's 5 591 patches and 15 784 elements.
+    options.patch_size = 0.0;
+    options.element_size = 0.0;
+  }
+  return options;
+}
+
+Solver::Solver(const Scene& scene, const SolverOptions& options)
+    : Solver(scene, options,
+             formfactor::make_backend(options.backend, formfactor::BackendOptions{options.resolution})) {}
+
+Solver::Solver(const Scene& scene, const SolverOptions& options,
+               std::unique_ptr<formfactor::FormFactorBackend> backend)
+    : scene_(scene), options_(options), hierarchy_(scene, options.meshing), backend_(std::move(backend)) {
+  if (!backend_) throw Error("solver: no form-factor back end");
+  if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
+  if (options_.max_shots < 0) throw Error("solver: --max-shots must be >= 0");
+  if (!(options_.gradient > 0.0)) throw Error("solver: --gradient must be > 0");
+  if (options_.shooter_samples < 1 || options_.shooter_samples > 64) {
+    throw Error("solver: shooter samples must be in [1, 64]");
+  }
+  initialise();
+}
+
+Solver::~Solver() = default;
+
+const Material& Solver::material(mesh::NodeId node) const {
+  return scene_.material_of_surface(hierarchy_.surface(node));
+}
+
+void Solver::initialise() {
+  // Cohen et al. 1988: B = E and dB = E for emitters, at patches and elements alike.
+  const std::size_t nodes = hierarchy_.node_count();
+  for (mesh::NodeId node = 0; node < nodes; ++node) {
+    hierarchy_.radiosity(node) = material(node).emission;
+    hierarchy_.unshot(node) = Rgb{};
+  }
+  emitted_flux_ = Rgb{};
+  for (mesh::NodeId patch : hierarchy_.patches()) {
+    const Rgb& emission = material(patch).emission;
+    hierarchy_.unshot(patch) = emission;
+    emitted_flux_ += emission * hierarchy_.area(patch);
+  }
+  absorbed_flux_ = Rgb{};
+  incident_.assign(nodes, Rgb{});
+}
+
+Rgb Solver::unshot_flux() const {
+  Rgb total{};
+  for (mesh::NodeId patch : hierarchy_.patches()) total += hierarchy_.unshot(patch) * hierarchy_.area(patch);
+  return total;
+}
+
+double Solver::unshot_fraction() const {
+  const double emitted = emitted_flux_.sum();
+  return emitted > 0.0 ? unshot_flux().sum() / emitted : 0.0;
+}
+
+mesh::NodeId Solver::pick_shooter() const {
+  mesh::NodeId best = mesh::kNoNode;
+  double best_flux = 0.0;
+  for (mesh::NodeId patch : hierarchy_.patches()) {
+    const double flux = hierarchy_.unshot(patch).sum() * hierarchy_.area(patch);
+    if (flux > best_flux) {  // strict: ties go to the lowest id, deterministically
+      best_flux = flux;
+      best = patch;
+    }
+  }
+  return best;
+}
+
+void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset) {
+  const auto start = Clock::now();
+  const Vec3 normal = hierarchy_.plane(shooter).normal;
+  if (options_.shooter_samples <= 1) {
+    backend_->compute(formfactor::Shooter::from_normal(hierarchy_.centroid(shooter), normal), cache_.view(), subset,
+                      ff_);
+  } else {
+    const auto samples = patch_samples(hierarchy_.corners(shooter), options_.shooter_samples);
+    ff_sample_.assign(ff_.size(), 0.0);
+    const auto for_each_receiver = [&](auto&& body) {
+      if (subset.empty()) {
+        for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
+      } else {
+        for (std::uint32_t i : subset) body(i);
+      }
+    };
+    for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
+    for (const SamplePoint& sample : samples) {
+      backend_->compute(formfactor::Shooter::from_normal(sample.position, normal), cache_.view(), subset,
+                        ff_sample_);
+      for_each_receiver([&](std::uint32_t i) { ff_[i] += sample.weight * ff_sample_[i]; });
+    }
+  }
+  times_.form_factors += seconds_since(start);
+}
+
+void Solver::receive(mesh::NodeId leaf, const Rgb& incident, double sign) {
+  const Rgb& rho = material(leaf).reflectance;
+  const Rgb reflected = rho * incident;  // flux
+  hierarchy_.radiosity(leaf) += reflected * (sign / hierarchy_.area(leaf));
+  const mesh::NodeId patch = hierarchy_.patch(leaf);
+  hierarchy_.unshot(patch) += reflected * (sign / hierarchy_.area(patch));
+  absorbed_flux_ += (Rgb(1.0) - rho) * incident * sign;
+}
+
+bool Solver::shoot_once() {
+  auto start = Clock::now();
+  cache_.update(hierarchy_);
+  times_.subdivision += seconds_since(start);
+
+  const mesh::NodeId shooter = pick_shooter();
+  if (shooter == mesh::kNoNode) return false;
+  const Rgb shot_flux = hierarchy_.unshot(shooter) * hierarchy_.area(shooter);
+
+  ff_.assign(cache_.size(), 0.0);
+  compute_form_factors(shooter, {});
+
+  hierarchy_.unshot(shooter) = Rgb{};
+  incident_.assign(hierarchy_.node_count(), Rgb{});
+  const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
+  std::vector<mesh::NodeId> touched;
+  for (std::size_t i = 0; i < cache_.size(); ++i) {
+    const mesh::NodeId leaf = cache_.leaf(i);
+    // A planar surface sends nothing to itself (its own elements included).
+    if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[i] > 0.0)) continue;
+    incident_[leaf] = shot_flux * ff_[i];
+    receive(leaf, incident_[leaf], 1.0);
+    touched.push_back(leaf);
+  }
+  ++shots_;
+
+  if (options_.adaptive) substructure(shooter, shot_flux, touched);
+  return true;
+}
+
+double Solver::largest_reflected_luminance() const {
+  double largest = 0.0;
+  for (mesh::NodeId leaf : cache_.leaves()) {
+    largest = std::max(largest, (hierarchy_.radiosity(leaf) - material(leaf).emission).luminance());
+  }
+  return largest;
+}
+
+void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux, const std::vector<mesh::NodeId>& touched) {
+  auto start = Clock::now();
+  const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
+  std::set<mesh::NodeId> candidates;
+  // Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the
+  // threshold grows with the largest one.
+  const auto test_gradients = [&](const std::vector<mesh::NodeId>& leaves) {
+    const double threshold = options_.gradient * largest_reflected_luminance();
+    if (!(threshold > 0.0)) return;
+    for (mesh::NodeId leaf : leaves) {
+      const double own = hierarchy_.radiosity(leaf).luminance();
+      for (mesh::NodeId neighbour : hierarchy_.edge_neighbours(leaf)) {
+        if (std::abs(own - hierarchy_.radiosity(neighbour).luminance()) > threshold) {
+          candidates.insert(leaf);
+          candidates.insert(neighbour);
+        }
+      }
+    }
+  };
+  test_gradients(touched);
+
+  std::vector<mesh::NodeId> split_nodes;
+  std::vector<mesh::NodeId> new_leaves;
+  while (!candidates.empty()) {
+    const mesh::NodeId first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
+    split_nodes.clear();
+    for (mesh::NodeId candidate : candidates) {
+      if (!hierarchy_.is_leaf(candidate)) continue;  // already split by balancing
+      const mesh::SplitResult result = hierarchy_.split(candidate);
+      if (!result.ok) continue;
+      split_nodes.push_back(candidate);
+      for (mesh::NodeId other : result.also_split) split_nodes.push_back(other);
+    }
+    candidates.clear();
+    if (split_nodes.empty()) break;
+    splits_ += static_cast<std::int64_t>(split_nodes.size());
+
+    // Leaves made in this round and, for each, the node that was a leaf when the shot was received.
+    new_leaves.clear();
+    for (mesh::NodeId node = first_new; node < hierarchy_.node_count(); ++node) {
+      if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
+    }
+    incident_.resize(hierarchy_.node_count(), Rgb{});
+    // Remove the old leaves' share of this shot: from their patches' unshot radiosity and the absorbed flux,
+    // and from the B the new leaves inherited.
+    for (mesh::NodeId old_leaf : split_nodes) {
+      if (old_leaf >= first_new) continue;
+      receive(old_leaf, incident_[old_leaf], -1.0);
+    }
+    for (mesh::NodeId leaf : new_leaves) {
+      mesh::NodeId ancestor = leaf;
+      while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
+      const Rgb inherited_share = material(ancestor).reflectance * incident_[ancestor] / hierarchy_.area(ancestor);
+      hierarchy_.radiosity(leaf) -= inherited_share;
+      hierarchy_.unshot(leaf) = Rgb{};
+    }
+
+    cache_.update(hierarchy_);
+    subset_.clear();
+    for (mesh::NodeId leaf : new_leaves) {
+      if (hierarchy_.surface(leaf) != shooter_surface) subset_.push_back(cache_.receiver(leaf));
+    }
+    times_.subdivision += seconds_since(start);
+    if (!subset_.empty()) {
+      ff_.assign(cache_.size(), 0.0);
+      compute_form_factors(shooter, subset_);
+    }
+    start = Clock::now();
+    for (mesh::NodeId leaf : new_leaves) {
+      const std::uint32_t receiver = cache_.receiver(leaf);
+      if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[receiver] > 0.0)) continue;
+      incident_[leaf] = shot_flux * ff_[receiver];
+      receive(leaf, incident_[leaf], 1.0);
+    }
+    test_gradients(new_leaves);
+  }
+  times_.subdivision += seconds_since(start);
+}
+
+void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
+  const auto start = Clock::now();
+  const double total_before = times_.total;
+  converged_ = false;
+  interrupted_ = false;
+  while (true) {
+    if (unshot_fraction() < options_.converge) {
+      converged_ = true;
+      break;
+    }
+    if (shots_ >= options_.max_shots) break;
+    if (!shoot_once()) {
+      converged_ = true;  // nothing left to shoot
+      break;
+    }
+    if (keep_going) {
+      const Progress progress{shots_, unshot_fraction(), hierarchy_.leaf_count(), total_before + seconds_since(start)};
+      if (!keep_going(progress)) {
+        converged_ = unshot_fraction() < options_.converge;
+        interrupted_ = !converged_;
+        break;
+      }
+    }
+  }
+  pull_up();
+  times_.total = total_before + seconds_since(start);
+}
+
+namespace {
+
+// Post-order: a node's B becomes the area-weighted mean of its children's.
+Rgb pull_up_node(const mesh::Hierarchy& hierarchy, mesh::NodeId node, std::vector<Rgb>& values) {
+  const auto children = hierarchy.children(node);
+  if (children.empty()) return values[node];
+  Rgb sum{};
+  double area = 0.0;
+  for (mesh::NodeId child : children) {
+    sum += pull_up_node(hierarchy, child, values) * hierarchy.area(child);
+    area += hierarchy.area(child);
+  }
+  values[node] = area > 0.0 ? sum / area : values[node];
+  return values[node];
+}
+
+}  // namespace
+
+std::vector<Rgb> Solver::radiosity() const {
+  std::vector<Rgb> values(hierarchy_.node_count());
+  for (mesh::NodeId node = 0; node < values.size(); ++node) values[node] = hierarchy_.radiosity(node);
+  for (mesh::NodeId patch : hierarchy_.patches()) pull_up_node(hierarchy_, patch, values);
+  return values;
+}
+
+void Solver::pull_up() {
+  const std::vector<Rgb> values = radiosity();
+  for (mesh::NodeId node = 0; node < values.size(); ++node) {
+    if (!hierarchy_.is_leaf(node)) hierarchy_.radiosity(node) = values[node];
+  }
+}
+
+Rgb Solver::ambient() const {
+  // Cohen et al. 1988, section 3.2: R = 1 / (1 - rho_avg), ambient = R sum dB_i A_i / sum A_i.
+  Rgb reflectance_area{};
+  Rgb unshot_area{};
+  double area = 0.0;
+  for (mesh::NodeId patch : hierarchy_.patches()) {
+    const double a = hierarchy_.area(patch);
+    reflectance_area += material(patch).reflectance * a;
+    unshot_area += hierarchy_.unshot(patch) * a;
+    area += a;
+  }
+  if (!(area > 0.0)) return Rgb{};
+  Rgb result{};
+  for (int c = 0; c < 3; ++c) {
+    const double rho_average = reflectance_area[c] / area;
+    result[c] = rho_average < 1.0 ? unshot_area[c] / area / (1.0 - rho_average) : 0.0;
+  }
+  return result;
+}
+
+std::vector<Rgb> Solver::displayed_radiosity() const {
+  std::vector<Rgb> values = radiosity();
+  const Rgb ambient_term = ambient();
+  for (mesh::NodeId node = 0; node < values.size(); ++node) {
+    if (hierarchy_.is_leaf(node)) values[node] += material(node).reflectance * ambient_term;
+  }
+  return values;
+}
+
+int Solver::max_leaf_level() const {
+  int level = 0;
+  for (mesh::NodeId leaf : hierarchy_.leaves()) level = std::max(level, hierarchy_.level(leaf));
+  return level;
+}
+
+}  // namespace aarad::refine

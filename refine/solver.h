@@ -1,0 +1,140 @@
+// Progressive-refinement radiosity with adaptive substructuring.
+//
+// Shooting: M. F. Cohen, S. E. Chen, J. R. Wallace and D. P. Greenberg, "A progressive refinement approach
+// to fast radiosity image generation", SIGGRAPH 1988, section 3. Substructuring (patches shoot, elements
+// receive, elements split where radiosity changes fast): M. F. Cohen, D. P. Greenberg, D. S. Immel and
+// P. J. Brock, "An efficient radiosity approach for realistic image synthesis", IEEE CG&A 1986.
+// Formulas as in ../shared/references.md; the options and their defaults are documented in docs/solver.md.
+#pragma once
+
+#include "core/rgb.h"
+#include "core/scene.h"
+#include "formfactor/backend.h"
+#include "mesh/hierarchy.h"
+#include "refine/receiver_cache.h"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace aarad::refine {
+
+struct SolverOptions {
+  std::string backend = "aa-hemicube";  // form-factor back end, see formfactor::backend_names()
+  int resolution = 100;                 // hemicube pixels along the full top face
+  double converge = 0.01;               // stop when unshot flux < converge * emitted flux (channel sums)
+  std::int64_t max_shots = 100000;      // stop after this many shots
+  bool adaptive = true;                 // adaptive substructuring on radiosity gradients
+  // Split a leaf when the luminance of its radiosity differs from an edge-neighbour's by more than
+  // gradient times the largest reflected radiosity luminance (B - E) of any leaf.
+  double gradient = 0.05;
+  // Gauss-Legendre points per direction on the shooting patch: 1 shoots from the centroid (the paper's
+  // method); n > 1 averages the back end's point factors over n x n points, approximating the
+  // patch-to-element form factor (used to check the loop against closed-form patch-to-patch values).
+  int shooter_samples = 1;
+  mesh::MeshingOptions meshing;  // patch and element sizes, max level, min area, balance
+};
+
+// The meshing defaults aarad uses for a scene: for the built-in office, sizes that give about the paper's
+// 5 591 patches and 15 784 elements; for the Cornell box, sizes that keep the AA hemicube solve short;
+// otherwise the hierarchy's own defaults (zeros).
+mesh::MeshingOptions default_meshing(const Scene& scene);
+
+struct Progress {
+  std::int64_t shots = 0;
+  double unshot_fraction = 1.0;
+  std::size_t elements = 0;
+  double seconds = 0.0;
+};
+
+struct SolverTimes {
+  double form_factors = 0.0;  // inside the back end (every shot and every substructuring recomputation)
+  double subdivision = 0.0;   // gradient tests, splits, receiver-view rebuilds and the corrections
+  double total = 0.0;         // the whole of run(), including the two above
+};
+
+class Solver {
+ public:
+  // `scene` must outlive the solver. Builds the hierarchy, sets B = E for every node and dB = E for every
+  // patch, and creates the back end by name (throws aarad::Error for unknown names or bad options).
+  Solver(const Scene& scene, const SolverOptions& options);
+  // With a caller-supplied back end (tests, custom back ends).
+  Solver(const Scene& scene, const SolverOptions& options, std::unique_ptr<formfactor::FormFactorBackend> backend);
+  ~Solver();
+  Solver(const Solver&) = delete;
+  Solver& operator=(const Solver&) = delete;
+
+  // One shot from the patch with the largest unshot flux, then substructuring. Returns false (and does
+  // nothing) when no patch has unshot flux left.
+  bool shoot_once();
+
+  // Shoots until converged, max_shots, or `keep_going` returns false (checked after every shot; it also
+  // reports progress). Sets converged() / interrupted() and the times.
+  void run(const std::function<bool(const Progress&)>& keep_going = {});
+
+  bool converged() const { return converged_; }
+  bool interrupted() const { return interrupted_; }
+  std::int64_t shots() const { return shots_; }
+
+  // Fluxes per channel (radiosity x area): emitted sum E A; absorbed so far sum (1 - rho) x incident flux;
+  // unshot sum over patches dB A. With exact, closed form factors absorbed + unshot == emitted.
+  Rgb emitted_flux() const { return emitted_flux_; }
+  Rgb absorbed_flux() const { return absorbed_flux_; }
+  Rgb unshot_flux() const;
+  // Unshot flux over emitted flux, both summed over channels (0 when nothing emits).
+  double unshot_fraction() const;
+
+  // The display-only ambient term of Cohen et al. 1988 (references.md) and each leaf's displayed radiosity
+  // B + rho * ambient, indexed by NodeId (inner nodes hold their B).
+  Rgb ambient() const;
+  std::vector<Rgb> displayed_radiosity() const;
+  // B per NodeId without the ambient term; inner nodes hold the area-weighted mean of their leaves.
+  std::vector<Rgb> radiosity() const;
+
+  const Scene& scene() const { return scene_; }
+  const SolverOptions& options() const { return options_; }
+  const mesh::Hierarchy& hierarchy() const { return hierarchy_; }
+  mesh::Hierarchy& hierarchy() { return hierarchy_; }
+  const formfactor::FormFactorBackend& backend() const { return *backend_; }
+  const SolverTimes& times() const { return times_; }
+  int max_leaf_level() const;
+  // Number of leaves split by substructuring so far (balancing splits included).
+  std::int64_t splits() const { return splits_; }
+
+  // Sets every inner node's B to the area-weighted mean of its children (bottom-up). run() calls it at the
+  // end; call it after driving shoot_once() by hand before reading inner nodes.
+  void pull_up();
+
+ private:
+  void initialise();
+  mesh::NodeId pick_shooter() const;
+  // Fills ff_ for the receivers in `subset` (all when empty), averaging over the shooter's sample points.
+  void compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset);
+  const Material& material(mesh::NodeId node) const;
+  void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
+  void substructure(mesh::NodeId shooter, const Rgb& shot_flux, const std::vector<mesh::NodeId>& touched);
+  double largest_reflected_luminance() const;
+
+  const Scene& scene_;
+  SolverOptions options_;
+  mesh::Hierarchy hierarchy_;
+  std::unique_ptr<formfactor::FormFactorBackend> backend_;
+  ReceiverCache cache_;
+
+  std::vector<double> ff_;         // per receiver: form factor of the current shot
+  std::vector<double> ff_sample_;  // per receiver: one sample point's factors
+  std::vector<Rgb> incident_;      // per NodeId: flux the node received in the current shot (leaves)
+  std::vector<std::uint32_t> subset_;
+
+  Rgb emitted_flux_{};
+  Rgb absorbed_flux_{};
+  std::int64_t shots_ = 0;
+  std::int64_t splits_ = 0;
+  bool converged_ = false;
+  bool interrupted_ = false;
+  SolverTimes times_;
+};
+
+}  // namespace aarad::refine

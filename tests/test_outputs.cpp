@@ -1,0 +1,184 @@
+// The output files of a solve (design.md): every file exists and reads back (PNG and EXR through OpenImageIO,
+// the PLY through OpenMesh), no temporary file is left, and the report has every field of the contract.
+#include "core/builtin_scenes.h"
+#include "core/image.h"
+#include "mesh/invariants.h"
+#include "refine/output.h"
+#include "refine/report.h"
+#include "refine/solver.h"
+
+#include <OpenImageIO/imageio.h>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+namespace aarad::refine {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReadImage {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> pixels;
+};
+
+ReadImage read_image(const fs::path& path) {
+  ReadImage image;
+  auto input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    ADD_FAILURE() << "cannot open " << path << ": " << OIIO::geterror();
+    return image;
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  image.width = spec.width;
+  image.height = spec.height;
+  image.channels = spec.nchannels;
+  image.pixels.resize(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  EXPECT_TRUE(input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+      << input->geterror();
+  input->close();
+  return image;
+}
+
+// Fraction of pixels that are not black.
+double lit_fraction(const ReadImage& image) {
+  std::size_t lit = 0;
+  for (std::size_t i = 0; i + 2 < image.pixels.size(); i += static_cast<std::size_t>(image.channels)) {
+    if (image.pixels[i] + image.pixels[i + 1] + image.pixels[i + 2] > 0.0f) ++lit;
+  }
+  return static_cast<double>(lit) / (static_cast<double>(image.width) * image.height);
+}
+
+class OutputsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    scene_ = std::make_unique<Scene>(make_cornell_box());
+    SolverOptions options;
+    options.meshing = default_meshing(*scene_);
+    options.converge = 0.05;  // a short solve: the files are the subject here
+    solver_ = std::make_unique<Solver>(*scene_, options);
+    solver_->run();
+    directory_ = fs::path(AARAD_BINARY_DIR) / "test-outputs" / "cornell";
+    fs::remove_all(directory_);
+    const OutputResult result = write_solution_files(*solver_, directory_, {.width = 160, .height = 120});
+    report_ = make_report(*solver_, mesh::check_invariants(solver_->hierarchy()), {.output = result.seconds});
+    write_report(report_, directory_ / "report.json");
+  }
+  static void TearDownTestSuite() {
+    solver_.reset();
+    scene_.reset();
+  }
+
+  static inline std::unique_ptr<Scene> scene_;
+  static inline std::unique_ptr<Solver> solver_;
+  static inline fs::path directory_;
+  static inline nlohmann::json report_;
+};
+
+TEST_F(OutputsTest, EveryFileAndNoTemporaryFile) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(directory_)) names.insert(entry.path().filename().string());
+  EXPECT_EQ(names, (std::set<std::string>{"mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr",
+                                          "report.json"}));
+}
+
+TEST_F(OutputsTest, PngsReadBackWithTheRequestedSize) {
+  for (const char* name : {"flat.png", "smooth.png", "mesh.png"}) {
+    const ReadImage image = read_image(directory_ / name);
+    EXPECT_EQ(image.width, 160) << name;
+    EXPECT_EQ(image.height, 120) << name;
+    EXPECT_EQ(image.channels, 3) << name;
+    // The official camera sees the box's inside filling most of the frame.
+    EXPECT_GT(lit_fraction(image), 0.5) << name;
+  }
+}
+
+TEST_F(OutputsTest, ExrHoldsLinearRadiosity) {
+  const ReadImage image = read_image(directory_ / "radiosity.exr");
+  ASSERT_EQ(image.width, 160);
+  ASSERT_EQ(image.height, 120);
+  ASSERT_EQ(image.channels, 3);
+  // Every pixel is a displayed element radiosity: the brightest is the light (17, 12, 4) plus its reflection.
+  float brightest = 0.0f;
+  for (std::size_t i = 0; i < image.pixels.size(); i += 3) brightest = std::max(brightest, image.pixels[i]);
+  EXPECT_GE(brightest, 17.0f);
+  EXPECT_LT(brightest, 17.0f + 1.0f);
+  EXPECT_GT(lit_fraction(image), 0.5);
+}
+
+TEST_F(OutputsTest, PlyReadsBackWithOneFacePerLeafAndTheContractProperties) {
+  OpenMesh::PolyMesh_ArrayKernelT<> mesh;
+  mesh.request_vertex_colors();
+  OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexColor;
+  ASSERT_TRUE(OpenMesh::IO::read_mesh(mesh, (directory_ / "mesh.ply").string(), options));
+  EXPECT_EQ(mesh.n_faces(), solver_->hierarchy().leaf_count());
+  EXPECT_TRUE(options.check(OpenMesh::IO::Options::VertexColor));
+  // The header names the per-face properties of the contract, binary.
+  std::ifstream in(directory_ / "mesh.ply", std::ios::binary);
+  std::string header, line;
+  while (std::getline(in, line) && line != "end_header") header += line + "\n";
+  EXPECT_NE(header.find("format binary"), std::string::npos) << header;
+  for (const char* property : {"radiosity_r", "radiosity_g", "radiosity_b", "level", "patch"}) {
+    EXPECT_NE(header.find(property), std::string::npos) << property << " missing from\n" << header;
+  }
+}
+
+TEST_F(OutputsTest, ReportHasEveryFieldOfTheContract) {
+  std::ifstream in(directory_ / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report, report_);
+  for (const char* field : {"scene", "method", "resolution", "converged", "interrupted", "shots", "unshot_fraction",
+                            "emitted_flux", "absorbed_flux", "patches", "elements", "max_level", "seconds",
+                            "invariants", "groups"}) {
+    EXPECT_TRUE(report.contains(field)) << field;
+  }
+  EXPECT_EQ(report["scene"], "cornell");
+  EXPECT_EQ(report["method"], "aa-hemicube");
+  EXPECT_EQ(report["resolution"], 100);
+  EXPECT_EQ(report["converged"], true);
+  EXPECT_EQ(report["interrupted"], false);
+  EXPECT_EQ(report["shots"], solver_->shots());
+  EXPECT_LT(report["unshot_fraction"].get<double>(), 0.05);
+  EXPECT_EQ(report["elements"], solver_->hierarchy().leaf_count());
+  EXPECT_EQ(report["patches"], solver_->hierarchy().patches().size());
+  for (const char* seconds : {"total", "form_factors", "subdivision", "output"}) {
+    EXPECT_TRUE(report["seconds"][seconds].is_number()) << seconds;
+  }
+  EXPECT_TRUE(report["invariants"]["violations"].is_array());
+  EXPECT_TRUE(report["invariants"]["violations"].empty());
+  for (const char* flux : {"emitted_flux", "absorbed_flux"}) {
+    ASSERT_TRUE(report[flux].is_array() && report[flux].size() == 3) << flux;
+  }
+  // Emitted flux: the light's 130 x 105 mm^2 times (17, 12, 4).
+  EXPECT_NEAR(report["emitted_flux"][0].get<double>(), 17.0 * 130.0 * 105.0, 1e-6 * 17.0 * 130.0 * 105.0);
+  ASSERT_EQ(report["groups"].size(), scene_->groups.size());
+  std::size_t elements = 0;
+  for (const auto& group : report["groups"]) {
+    for (const char* field : {"name", "area", "elements", "mean_radiosity"}) {
+      EXPECT_TRUE(group.contains(field)) << field;
+    }
+    EXPECT_EQ(group["mean_radiosity"].size(), 3u);
+    elements += group["elements"].get<std::size_t>();
+  }
+  EXPECT_EQ(elements, solver_->hierarchy().leaf_count());
+}
+
+TEST(OutputsToneMap, PercentileExposureAndSrgbEncoding) {
+  // 99 % of the area at 0.5, 1 % at 10: the 99th percentile is 0.5, so 0.5 maps to 255.
+  const std::vector<Rgb> values{Rgb(0.5), Rgb(10.0)};
+  const std::vector<double> areas{99.0, 1.0};
+  const ToneMap map = ToneMap::from_percentile(values, areas, 0.99);
+  EXPECT_DOUBLE_EQ(map.exposure, 2.0);
+  EXPECT_EQ(map(Rgb(0.5))[0], 255);
+  EXPECT_EQ(map(Rgb(0.0))[0], 0);
+  // sRGB (IEC 61966-2-1): linear 0.18 encodes to 0.4614, 118 of 255 (0.09 x exposure 2).
+  EXPECT_EQ(map(Rgb(0.09))[0], 118);
+}
+
+}  // namespace
+}  // namespace aarad::refine

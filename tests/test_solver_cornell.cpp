@@ -1,0 +1,110 @@
+// The Cornell box solved with the AA hemicube at N = 100 and adaptive substructuring (issue 5): it converges,
+// gives the same numbers with 1 and 2 threads, passes check_invariants, and the adaptive mesh is finer along
+// the blocks' shadow edges on the floor than in the middle of the back wall.
+#include "core/builtin_scenes.h"
+#include "mesh/invariants.h"
+#include "refine/solver.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <memory>
+
+namespace aarad::refine {
+namespace {
+
+struct CornellRun {
+  std::unique_ptr<Solver> solver;
+  std::vector<Rgb> radiosity;
+};
+
+const Scene& cornell() {
+  static const Scene scene = make_cornell_box();
+  return scene;
+}
+
+CornellRun solve_cornell(int threads) {
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  SolverOptions options;
+  options.meshing = default_meshing(cornell());
+  CornellRun run{std::make_unique<Solver>(cornell(), options), {}};
+  run.solver->run();
+  run.radiosity = run.solver->radiosity();
+  std::printf("cornell, %d thread(s): %lld shots, %zu elements, max level %d, %.2f s (form factors %.2f s)\n",
+              threads, static_cast<long long>(run.solver->shots()), run.solver->hierarchy().leaf_count(),
+              run.solver->max_leaf_level(), run.solver->times().total, run.solver->times().form_factors);
+  return run;
+}
+
+const CornellRun& one_thread() {
+  static const CornellRun run = solve_cornell(1);
+  return run;
+}
+
+TEST(SolverCornell, Converges) {
+  const Solver& solver = *one_thread().solver;
+  EXPECT_TRUE(solver.converged());
+  EXPECT_FALSE(solver.interrupted());
+  EXPECT_LT(solver.unshot_fraction(), 0.01);
+  EXPECT_GT(solver.splits(), 0);
+  // Light flux in = light absorbed + light still unshot (+ what the hemicube's factors lose or gain): the
+  // Cornell box is closed except for its open front, so absorbed + unshot stays below the emitted flux.
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_LT(solver.absorbed_flux()[c] + solver.unshot_flux()[c], solver.emitted_flux()[c]);
+    EXPECT_GT(solver.absorbed_flux()[c] + solver.unshot_flux()[c], 0.5 * solver.emitted_flux()[c]);
+  }
+}
+
+TEST(SolverCornell, SameNumbersWithOneAndTwoThreads) {
+  const CornellRun two = solve_cornell(2);
+  const CornellRun& one = one_thread();
+  ASSERT_EQ(one.solver->shots(), two.solver->shots());
+  ASSERT_EQ(one.solver->hierarchy().node_count(), two.solver->hierarchy().node_count());
+  ASSERT_EQ(one.radiosity.size(), two.radiosity.size());
+  for (std::size_t i = 0; i < one.radiosity.size(); ++i) {
+    ASSERT_EQ(one.radiosity[i], two.radiosity[i]) << "node " << i;
+  }
+  EXPECT_EQ(one.solver->absorbed_flux(), two.solver->absorbed_flux());
+}
+
+TEST(SolverCornell, InvariantsHoldAfterTheSolve) {
+  const std::vector<mesh::Violation> violations = mesh::check_invariants(one_thread().solver->hierarchy());
+  for (const mesh::Violation& v : violations) ADD_FAILURE() << v.invariant << ": " << v.message;
+  EXPECT_TRUE(violations.empty());
+}
+
+TEST(SolverCornell, MeshIsFinerAlongShadowEdgesThanInTheBackWallMiddle) {
+  const Solver& solver = *one_thread().solver;
+  const mesh::Hierarchy& hierarchy = solver.hierarchy();
+  const Scene& scene = cornell();
+  const std::uint32_t floor = *scene.find_group("floor");
+  const std::uint32_t back_wall = *scene.find_group("back_wall");
+  // Block footprints (references.md): near either block's base means within 40 mm of its footprint's box.
+  const auto near_block_base = [](const Vec3& p) {
+    const bool short_block = p.x > 82 - 40 && p.x < 290 + 40 && p.z > 65 - 40 && p.z < 272 + 40;
+    const bool tall_block = p.x > 265 - 40 && p.x < 472 + 40 && p.z > 247 - 40 && p.z < 456 + 40;
+    return short_block || tall_block;
+  };
+  int floor_near_blocks = -1;
+  int back_wall_middle = -1;
+  std::size_t floor_leaves_near_blocks = 0;
+  for (mesh::NodeId leaf : hierarchy.leaves()) {
+    const std::uint32_t group = scene.surfaces[hierarchy.surface(leaf)].group;
+    const Vec3 c = hierarchy.centroid(leaf);
+    if (group == floor && near_block_base(c)) {
+      floor_near_blocks = std::max(floor_near_blocks, hierarchy.level(leaf));
+      ++floor_leaves_near_blocks;
+    }
+    if (group == back_wall && c.x > 180 && c.x < 380 && c.y > 180 && c.y < 380) {
+      back_wall_middle = std::max(back_wall_middle, hierarchy.level(leaf));
+    }
+  }
+  std::printf("max level: floor near the blocks %d (%zu leaves), back wall middle %d\n", floor_near_blocks,
+              floor_leaves_near_blocks, back_wall_middle);
+  ASSERT_GE(back_wall_middle, 0);
+  EXPECT_GT(floor_near_blocks, back_wall_middle);
+}
+
+}  // namespace
+}  // namespace aarad::refine
