@@ -61,12 +61,21 @@ class Hierarchy {
   const Plane& plane(NodeId node) const;         // the surface's plane
   // Corners (not hanging vertices) counter-clockwise seen from the front: 3 or 4 points.
   std::vector<Vec3> corners(NodeId node) const;
+  int corner_count(NodeId node) const;                    // 3 or 4
+  void corners(NodeId node, std::vector<Vec3>& out) const;  // the same, into a reused buffer
+  // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise.
+  void leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const;
 
   // Radiosity B of every node and unshot radiosity dB (meaningful for patches), per channel.
   Rgb& radiosity(NodeId node);
   const Rgb& radiosity(NodeId node) const;
   Rgb& unshot(NodeId node);
   const Rgb& unshot(NodeId node) const;
+  // Adds `delta` to the radiosity of `leaf` and delta x area(leaf) / area(a) to every ancestor a, so each
+  // inner node keeps the area-weighted mean of its leaves (an invariant check_invariants verifies). O(level).
+  void add_radiosity(NodeId leaf, const Rgb& delta);
+  // Recomputes the radiosity of every inner node as the area-weighted mean of its children, bottom up. O(n).
+  void update_inner_radiosity();
 
   // Leaves in a deterministic order (by node id). leaf_count() is O(1).
   std::vector<NodeId> leaves() const;
@@ -77,6 +86,11 @@ class Hierarchy {
   // Increases whenever the leaf set changes, so callers can cache views of the leaves.
   std::uint64_t revision() const;
 
+  // Counts of the initial meshing: patches().size() patches and this many level-1 elements.
+  std::size_t initial_element_count() const;
+  // Bytes held by the leaf mesh and the node arrays (container capacities).
+  std::size_t memory_bytes() const;
+
   // Splits leaf `node` into four (quads into four quads, triangles into four triangles). Edge midpoints a
   // neighbour already made are reused; an unsplit neighbour gains the midpoint as a hanging vertex.
   // Children inherit the parent's B and unshot 0. Refused (ok = false) when the node is not a leaf, when
@@ -84,8 +98,10 @@ class Hierarchy {
   // are split first so edge-neighbours differ by at most one level.
   SplitResult split(NodeId node);
 
-  // Leaves of the same surface that share a piece of an edge with leaf `node`.
+  // Leaves of the same surface that share a piece of an edge with leaf `node` (across hanging vertices too),
+  // in the order of the leaf's face loop. O(number of vertices on the leaf's loop).
   std::vector<NodeId> edge_neighbours(NodeId node) const;
+  void edge_neighbours(NodeId node, std::vector<NodeId>& out) const;  // the same, into a reused buffer
 
   // The mesh of leaves; implementation types are in mesh/leaf_mesh.h.
   struct Impl;
@@ -93,6 +109,9 @@ class Hierarchy {
   Impl& impl() { return *impl_; }
 
  private:
+  std::array<NodeId, 4> split_leaf(NodeId node);  // the split itself, no checks
+  void split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_split);
+
   std::unique_ptr<Impl> impl_;
 };
 

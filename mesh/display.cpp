@@ -1,0 +1,141 @@
+// Display reconstruction of element radiosities: vertex values as area-weighted means of the surrounding
+// leaves (Cohen and Wallace, "Radiosity and Realistic Image Synthesis", 1993, section 9.3.1 "nodal averaging"),
+// hanging vertices interpolated along their host edge so no seam appears (Baum, Mann, Smith and Winget 1991,
+// section 4.3, "T-vertices"), and a crack-free triangulation that anchors the T-vertices.
+#include "mesh/display.h"
+
+#include "mesh/leaf_mesh.h"
+
+#include <algorithm>
+
+namespace aarad::mesh {
+namespace {
+
+using VertexHandle = LeafMesh::VertexHandle;
+using FaceHandle = LeafMesh::FaceHandle;
+
+// The leaf's face loop starting at its first corner.
+void loop_from_first_corner(const Hierarchy::Impl& m, NodeId leaf, std::vector<int>& loop) {
+  loop.clear();
+  for (auto v : m.mesh.fv_range(FaceHandle(m.face[leaf]))) loop.push_back(v.idx());
+  const auto first = std::find(loop.begin(), loop.end(), m.corners[leaf][0]);
+  std::rotate(loop.begin(), first, loop.end());
+}
+
+}  // namespace
+
+DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> node_values) {
+  const Hierarchy::Impl& m = hierarchy.impl();
+  const std::size_t vertex_count = m.mesh.n_vertices();
+  const std::vector<NodeId> leaves = hierarchy.leaves();
+
+  // Hanging vertices: a loop vertex that is not a corner of the leaf lies on the edge between the corners
+  // around it (its host edge), at parameter t.
+  struct Host {
+    int a = -1, b = -1;
+    double t = 0.0;
+  };
+  std::vector<Host> host(vertex_count);
+  std::vector<Rgb> weighted(vertex_count);
+  std::vector<double> weight(vertex_count, 0.0);
+  std::vector<int> loop;
+  for (NodeId leaf : leaves) {
+    loop_from_first_corner(m, leaf, loop);
+    const int corners = m.corner_count(leaf);
+    int k = 0;
+    for (std::size_t i = 1; i < loop.size(); ++i) {
+      const int next = m.corners[leaf][static_cast<std::size_t>((k + 1) % corners)];
+      if (loop[i] == next) {
+        k = (k + 1) % corners;
+        continue;
+      }
+      const int a = m.corners[leaf][static_cast<std::size_t>(k)];
+      const Vec3 pa = m.point(a), d = m.point(next) - pa;
+      host[static_cast<std::size_t>(loop[i])] = {a, next, glm::dot(m.point(loop[i]) - pa, d) / glm::dot(d, d)};
+    }
+    for (int c = 0; c < corners; ++c) {
+      const auto v = static_cast<std::size_t>(m.corners[leaf][static_cast<std::size_t>(c)]);
+      weighted[v] += node_values[leaf] * m.area[leaf];
+      weight[v] += m.area[leaf];
+    }
+  }
+
+  // Resolve values; a hanging vertex's host corners may hang on a coarser leaf themselves (nested), so
+  // resolve depth first. Host edges belong to strictly larger leaves, so the recursion ends.
+  DisplayMesh out;
+  out.positions.reserve(vertex_count);
+  for (std::size_t v = 0; v < vertex_count; ++v) out.positions.push_back(m.point(static_cast<int>(v)));
+  out.vertex_values.assign(vertex_count, Rgb());
+  std::vector<char> state(vertex_count, 0);  // 0 unresolved, 1 in progress, 2 done
+  std::vector<int> stack;
+  for (std::size_t start = 0; start < vertex_count; ++start) {
+    if (state[start] == 2) continue;
+    stack.push_back(static_cast<int>(start));
+    while (!stack.empty()) {
+      const auto v = static_cast<std::size_t>(stack.back());
+      const Host& hv = host[v];
+      if (hv.a < 0) {
+        out.vertex_values[v] = weight[v] > 0.0 ? weighted[v] / weight[v] : Rgb();
+        state[v] = 2;
+        stack.pop_back();
+        continue;
+      }
+      const auto a = static_cast<std::size_t>(hv.a), b = static_cast<std::size_t>(hv.b);
+      if (state[a] == 2 && state[b] == 2) {
+        out.vertex_values[v] = out.vertex_values[a] * (1.0 - hv.t) + out.vertex_values[b] * hv.t;
+        state[v] = 2;
+        stack.pop_back();
+        continue;
+      }
+      if (state[v] == 1) {  // a cycle of hosts: only a corrupted mesh gets here; fall back to the mean
+        out.vertex_values[v] = weight[v] > 0.0 ? weighted[v] / weight[v] : Rgb();
+        state[v] = 2;
+        stack.pop_back();
+        continue;
+      }
+      state[v] = 1;
+      if (state[a] != 2) stack.push_back(hv.a);
+      if (state[b] != 2) stack.push_back(hv.b);
+    }
+  }
+
+  // Triangulation. A leaf without hanging vertices is one triangle or two (along the shorter diagonal); a leaf
+  // with hanging vertices is a fan from its centre over every piece of its loop, which keeps each T-vertex an
+  // actual vertex of the triangulation (no crack) and every triangle non-degenerate for a convex leaf.
+  out.triangles.reserve(leaves.size() * 2);
+  out.triangle_leaf.reserve(leaves.size() * 2);
+  for (NodeId leaf : leaves) {
+    loop_from_first_corner(m, leaf, loop);
+    const int corners = m.corner_count(leaf);
+    auto add = [&](int a, int b, int c) {
+      out.triangles.push_back({static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(c)});
+      out.triangle_leaf.push_back(leaf);
+    };
+    if (static_cast<int>(loop.size()) == corners) {
+      if (corners == 3) {
+        add(loop[0], loop[1], loop[2]);
+      } else if (glm::length(m.point(loop[2]) - m.point(loop[0])) <= glm::length(m.point(loop[3]) - m.point(loop[1]))) {
+        add(loop[0], loop[1], loop[2]);
+        add(loop[0], loop[2], loop[3]);
+      } else {
+        add(loop[0], loop[1], loop[3]);
+        add(loop[1], loop[2], loop[3]);
+      }
+      continue;
+    }
+    Vec3 centre(0.0);
+    Rgb value;
+    for (int c = 0; c < corners; ++c) {
+      const int v = m.corners[leaf][static_cast<std::size_t>(c)];
+      centre += m.point(v);
+      value += out.vertex_values[static_cast<std::size_t>(v)];
+    }
+    const auto centre_index = static_cast<int>(out.positions.size());
+    out.positions.push_back(centre / static_cast<double>(corners));
+    out.vertex_values.push_back(value / static_cast<double>(corners));
+    for (std::size_t i = 0; i < loop.size(); ++i) add(centre_index, loop[i], loop[(i + 1) % loop.size()]);
+  }
+  return out;
+}
+
+}  // namespace aarad::mesh

@@ -1,0 +1,424 @@
+// The patch/element hierarchy: initial meshing into one OpenMesh PolyMesh, 1-to-4 splits with hanging (T-)
+// vertices, optional 2:1 balance, and neighbour queries.
+// Substructuring after Cohen, Greenberg, Immel and Brock 1986 ("An efficient radiosity approach for realistic
+// image synthesis", section 3); T-vertex handling as in Baum, Mann, Smith and Winget 1991 ("Making radiosity
+// usable: automatic preprocessing and meshing techniques for the generation of accurate radiosity solutions",
+// section 4: an unrefined neighbour keeps the new vertex on its edge; balanced subdivision keeps neighbours
+// within one level). The choices (no deletion, child order, defaults) are in docs/hierarchy.md.
+#include "mesh/hierarchy.h"
+
+#include "core/error.h"
+#include "core/polygon.h"
+#include "mesh/initial_meshing.h"
+#include "mesh/leaf_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace aarad::mesh {
+namespace {
+
+using VertexHandle = LeafMesh::VertexHandle;
+using HalfedgeHandle = LeafMesh::HalfedgeHandle;
+using FaceHandle = LeafMesh::FaceHandle;
+
+// The boundary of a freshly meshed surface as maximal straight segments.
+SurfaceBoundary boundary_of(const LeafMesh& mesh, int first_vertex, int end_vertex) {
+  SurfaceBoundary boundary;
+  std::vector<char> visited(mesh.n_halfedges(), 0);
+  for (int vi = first_vertex; vi < end_vertex; ++vi)
+    for (auto h : mesh.voh_range(VertexHandle(vi))) {
+      if (!h.is_boundary() || visited[static_cast<std::size_t>(h.idx())]) continue;
+      // Walk the loop, starting right after a corner (a direction change) so segments are maximal.
+      auto direction = [&](HalfedgeHandle e) {
+        return to_vec3(mesh.point(mesh.to_vertex_handle(e)) - mesh.point(mesh.from_vertex_handle(e)));
+      };
+      auto straight = [&](HalfedgeHandle a, HalfedgeHandle b) {
+        const Vec3 da = direction(a), db = direction(b);
+        return glm::dot(da, db) > 0.0 &&
+               glm::length(glm::cross(da, db)) <= 1e-12 * glm::length(da) * glm::length(db);
+      };
+      HalfedgeHandle start = h;
+      for (HalfedgeHandle e = mesh.prev_halfedge_handle(start); e != h; e = mesh.prev_halfedge_handle(e)) {
+        if (!straight(e, start)) break;
+        start = e;
+      }
+      HalfedgeHandle e = start;
+      Vec3 segment_start = to_vec3(mesh.point(mesh.from_vertex_handle(start)));
+      do {
+        visited[static_cast<std::size_t>(e.idx())] = 1;
+        boundary.length += glm::length(direction(e));
+        const HalfedgeHandle next = mesh.next_halfedge_handle(e);
+        if (!straight(e, next) || next == start) {
+          const Vec3 end = to_vec3(mesh.point(mesh.to_vertex_handle(e)));
+          boundary.segments.push_back({segment_start, end});
+          segment_start = end;
+        }
+        e = next;
+      } while (e != start);
+    }
+  return boundary;
+}
+
+// The halfedge of face f's loop that ends at v (in) or starts at v (out).
+HalfedgeHandle halfedge_into(const LeafMesh& mesh, FaceHandle f, VertexHandle v) {
+  for (auto h : mesh.fh_range(f))
+    if (h.to() == v) return h;
+  return HalfedgeHandle();
+}
+HalfedgeHandle halfedge_out_of(const LeafMesh& mesh, FaceHandle f, VertexHandle v) {
+  for (auto h : mesh.fh_range(f))
+    if (h.from() == v) return h;
+  return HalfedgeHandle();
+}
+
+// Splits face f along a new edge a -> b (both on its loop); the new face holds a -> b and the old loop from b
+// back to a, f keeps b -> a and the old loop from a to b. Returns the halfedge a -> b.
+HalfedgeHandle connect(LeafMesh& mesh, FaceHandle f, VertexHandle a, VertexHandle b) {
+  return mesh.insert_edge(halfedge_into(mesh, f, a), halfedge_out_of(mesh, f, b));
+}
+
+// The midpoint of the edge from corner a (the loop halfedge `out_of_a` leaves it) to corner b of one face:
+// reused when a neighbour already put it on the loop (the same expression 0.5 (a + b) gives the same bits
+// from both sides), else a new vertex inserted into the loop piece that contains it, which makes it a
+// hanging vertex of the face across that piece.
+VertexHandle midpoint_on_chain(LeafMesh& mesh, HalfedgeHandle out_of_a, VertexHandle b) {
+  const VertexHandle a = mesh.from_vertex_handle(out_of_a);
+  const OpenMesh::Vec3d pa = mesh.point(a), pb = mesh.point(b);
+  const OpenMesh::Vec3d mid = 0.5 * (pa + pb);
+  for (HalfedgeHandle h = out_of_a; mesh.to_vertex_handle(h) != b; h = mesh.next_halfedge_handle(h))
+    if (mesh.point(mesh.to_vertex_handle(h)) == mid) return mesh.to_vertex_handle(h);
+  const OpenMesh::Vec3d d = pb - pa;
+  const double dd = OpenMesh::dot(d, d);
+  HalfedgeHandle h = out_of_a;
+  while (mesh.to_vertex_handle(h) != b &&
+         OpenMesh::dot(mesh.point(mesh.to_vertex_handle(h)) - pa, d) / dd < 0.5)
+    h = mesh.next_halfedge_handle(h);
+  const VertexHandle m = mesh.add_vertex(mid);
+  mesh.split_edge(mesh.edge_handle(h), m);
+  return m;
+}
+
+}  // namespace
+
+// --- Impl ---------------------------------------------------------------------------------------------------
+
+NodeId Hierarchy::Impl::add_node(NodeId parent_id, int node_level, NodeId patch_id, std::uint32_t surface_id,
+                                 const std::array<int, 4>& corner_vertices) {
+  const auto id = static_cast<NodeId>(parent.size());
+  parent.push_back(parent_id);
+  child_begin.push_back(0);
+  child_count.push_back(0);
+  level.push_back(static_cast<std::uint8_t>(node_level));
+  patch_of.push_back(patch_id == kNoNode ? id : patch_id);
+  surface.push_back(surface_id);
+  corners.push_back(corner_vertices);
+  area.push_back(0.0);
+  area.back() = corner_area(id);
+  radiosity.emplace_back();
+  unshot.emplace_back();
+  face.push_back(-1);
+  return id;
+}
+
+double Hierarchy::Impl::corner_area(NodeId node) const {
+  std::array<Vec3, 4> p;
+  const int n = corner_count(node);
+  for (int k = 0; k < n; ++k) p[static_cast<std::size_t>(k)] = point(corners[node][static_cast<std::size_t>(k)]);
+  return aarad::area(std::span<const Vec3>(p.data(), static_cast<std::size_t>(n)));
+}
+
+// --- Construction ---------------------------------------------------------------------------------------------
+
+Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.scene = scene;
+  m.options = resolve_options(scene, options);
+  m.mesh.add_property(m.face_node, "node");
+  m.boundaries.resize(scene.surfaces.size());
+  for (std::uint32_t s = 0; s < scene.surfaces.size(); ++s) {
+    const SurfaceMeshing meshing = mesh_surface(scene, s, m.options.patch_size, m.options.element_size);
+    const int base = static_cast<int>(m.mesh.n_vertices());
+    for (const Vec3& p : meshing.points) m.mesh.add_vertex(to_point(p));
+    auto shifted = [base](CornerIndices c) {
+      for (int& i : c)
+        if (i >= 0) i += base;
+      return c;
+    };
+    for (std::size_t p = 0; p < meshing.patches.size(); ++p) {
+      const NodeId patch = m.add_node(kNoNode, 0, kNoNode, s, shifted(meshing.patches[p]));
+      m.patch_ids.push_back(patch);
+      m.child_begin[patch] = static_cast<std::uint32_t>(m.child_ids.size());
+      m.child_count[patch] = static_cast<std::uint32_t>(meshing.elements[p].size());
+      for (const CornerIndices& element : meshing.elements[p]) {
+        const CornerIndices c = shifted(element);
+        const NodeId node = m.add_node(patch, 1, patch, s, c);
+        m.child_ids.push_back(node);
+        std::vector<VertexHandle> loop;
+        for (int i : c)
+          if (i >= 0) loop.emplace_back(i);
+        const FaceHandle f = m.mesh.add_face(loop);
+        if (!f.is_valid())
+          throw Error("initial meshing: OpenMesh refused an element of surface " + std::to_string(s) + " (group '" +
+                      scene.groups[scene.surfaces[s].group].name + "'): the surface overlaps itself");
+        m.face[node] = f.idx();
+        m.mesh.property(m.face_node, f) = node;
+        ++m.leaf_count;
+        ++m.initial_elements;
+      }
+    }
+    m.boundaries[s] = boundary_of(m.mesh, base, static_cast<int>(m.mesh.n_vertices()));
+  }
+  m.revision = 1;
+}
+
+Hierarchy::~Hierarchy() = default;
+Hierarchy::Hierarchy(Hierarchy&&) noexcept = default;
+Hierarchy& Hierarchy::operator=(Hierarchy&&) noexcept = default;
+
+// --- Queries ----------------------------------------------------------------------------------------------------
+
+const Scene& Hierarchy::scene() const { return impl_->scene; }
+const MeshingOptions& Hierarchy::options() const { return impl_->options; }
+std::size_t Hierarchy::node_count() const { return impl_->parent.size(); }
+std::span<const NodeId> Hierarchy::patches() const { return impl_->patch_ids; }
+NodeId Hierarchy::parent(NodeId node) const { return impl_->parent[node]; }
+std::span<const NodeId> Hierarchy::children(NodeId node) const {
+  return {impl_->child_ids.data() + impl_->child_begin[node], impl_->child_count[node]};
+}
+bool Hierarchy::is_leaf(NodeId node) const { return impl_->child_count[node] == 0; }
+int Hierarchy::level(NodeId node) const { return impl_->level[node]; }
+NodeId Hierarchy::patch(NodeId node) const { return impl_->patch_of[node]; }
+std::uint32_t Hierarchy::surface(NodeId node) const { return impl_->surface[node]; }
+double Hierarchy::area(NodeId node) const { return impl_->area[node]; }
+const Plane& Hierarchy::plane(NodeId node) const { return impl_->scene.surfaces[impl_->surface[node]].plane; }
+int Hierarchy::corner_count(NodeId node) const { return impl_->corner_count(node); }
+
+void Hierarchy::corners(NodeId node, std::vector<Vec3>& out) const {
+  out.clear();
+  const int n = impl_->corner_count(node);
+  for (int k = 0; k < n; ++k) out.push_back(impl_->point(impl_->corners[node][static_cast<std::size_t>(k)]));
+}
+std::vector<Vec3> Hierarchy::corners(NodeId node) const {
+  std::vector<Vec3> out;
+  corners(node, out);
+  return out;
+}
+Vec3 Hierarchy::centroid(NodeId node) const {
+  std::array<Vec3, 4> p;
+  const int n = impl_->corner_count(node);
+  for (int k = 0; k < n; ++k) p[static_cast<std::size_t>(k)] = impl_->point(impl_->corners[node][static_cast<std::size_t>(k)]);
+  return aarad::centroid(std::span<const Vec3>(p.data(), static_cast<std::size_t>(n)));
+}
+void Hierarchy::leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const {
+  out.clear();
+  const LeafMesh& mesh = impl_->mesh;
+  for (auto v : mesh.fv_range(FaceHandle(impl_->face[leaf]))) out.push_back(to_vec3(mesh.point(v)));
+}
+
+Rgb& Hierarchy::radiosity(NodeId node) { return impl_->radiosity[node]; }
+const Rgb& Hierarchy::radiosity(NodeId node) const { return impl_->radiosity[node]; }
+Rgb& Hierarchy::unshot(NodeId node) { return impl_->unshot[node]; }
+const Rgb& Hierarchy::unshot(NodeId node) const { return impl_->unshot[node]; }
+
+void Hierarchy::add_radiosity(NodeId leaf, const Rgb& delta) {
+  Impl& m = *impl_;
+  m.radiosity[leaf] += delta;
+  for (NodeId a = m.parent[leaf]; a != kNoNode; a = m.parent[a]) m.radiosity[a] += delta * (m.area[leaf] / m.area[a]);
+}
+
+void Hierarchy::update_inner_radiosity() {
+  Impl& m = *impl_;
+  for (std::size_t i = m.parent.size(); i-- > 0;) {  // children have larger ids than their parent
+    const auto node = static_cast<NodeId>(i);
+    if (m.child_count[node] == 0) continue;
+    Rgb sum;
+    double area = 0.0;
+    for (NodeId c : children(node)) {
+      sum += m.radiosity[c] * m.area[c];
+      area += m.area[c];
+    }
+    m.radiosity[node] = sum / area;
+  }
+}
+
+std::vector<NodeId> Hierarchy::leaves() const {
+  std::vector<NodeId> out;
+  out.reserve(impl_->leaf_count);
+  for (NodeId n = 0; n < impl_->parent.size(); ++n)
+    if (impl_->child_count[n] == 0) out.push_back(n);
+  return out;
+}
+std::size_t Hierarchy::leaf_count() const { return impl_->leaf_count; }
+
+std::vector<NodeId> Hierarchy::leaves_under(NodeId node) const {
+  std::vector<NodeId> out, stack{node};
+  while (!stack.empty()) {
+    const NodeId n = stack.back();
+    stack.pop_back();
+    if (is_leaf(n)) {
+      out.push_back(n);
+      continue;
+    }
+    const auto c = children(n);
+    stack.insert(stack.end(), c.rbegin(), c.rend());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::uint64_t Hierarchy::revision() const { return impl_->revision; }
+std::size_t Hierarchy::initial_element_count() const { return impl_->initial_elements; }
+
+std::size_t Hierarchy::memory_bytes() const {
+  const Impl& m = *impl_;
+  auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  std::size_t total = bytes(m.parent) + bytes(m.child_begin) + bytes(m.child_count) + bytes(m.child_ids) +
+                      bytes(m.level) + bytes(m.patch_of) + bytes(m.surface) + bytes(m.corners) + bytes(m.area) +
+                      bytes(m.radiosity) + bytes(m.unshot) + bytes(m.face) + bytes(m.patch_ids);
+  total += m.mesh.n_vertices() * (sizeof(LeafMesh::Vertex) + sizeof(LeafMesh::Point)) +
+           m.mesh.n_edges() * sizeof(LeafMesh::Edge) + m.mesh.n_faces() * (sizeof(LeafMesh::Face) + sizeof(NodeId));
+  return total;
+}
+
+void Hierarchy::edge_neighbours(NodeId node, std::vector<NodeId>& out) const {
+  out.clear();
+  const LeafMesh& mesh = impl_->mesh;
+  for (auto h : mesh.fh_range(FaceHandle(impl_->face[node]))) {
+    const FaceHandle g = mesh.opposite_face_handle(h);
+    if (!g.is_valid()) continue;
+    const NodeId n = mesh.property(impl_->face_node, g);
+    if (std::find(out.begin(), out.end(), n) == out.end()) out.push_back(n);
+  }
+}
+std::vector<NodeId> Hierarchy::edge_neighbours(NodeId node) const {
+  std::vector<NodeId> out;
+  edge_neighbours(node, out);
+  return out;
+}
+
+// --- Splitting -----------------------------------------------------------------------------------------------
+
+std::array<NodeId, 4> Hierarchy::split_leaf(NodeId node) {
+  Impl& m = *impl_;
+  LeafMesh& mesh = m.mesh;
+  const FaceHandle f(m.face[node]);
+  const int n = m.corner_count(node);
+  std::array<VertexHandle, 4> c, mid;
+  for (int k = 0; k < n; ++k) c[static_cast<std::size_t>(k)] = VertexHandle(m.corners[node][static_cast<std::size_t>(k)]);
+  for (int k = 0; k < n; ++k)
+    mid[static_cast<std::size_t>(k)] =
+        midpoint_on_chain(mesh, halfedge_out_of(mesh, f, c[static_cast<std::size_t>(k)]), c[static_cast<std::size_t>((k + 1) % n)]);
+  // The loop halfedge leaving each corner stays with the child at that corner through the edge insertions.
+  std::array<HalfedgeHandle, 4> out_of_corner;
+  for (int k = 0; k < n; ++k) out_of_corner[static_cast<std::size_t>(k)] = halfedge_out_of(mesh, f, c[static_cast<std::size_t>(k)]);
+
+  std::array<std::array<int, 4>, 4> child_corners;
+  std::array<FaceHandle, 4> child_face;
+  if (n == 4) {
+    const OpenMesh::Vec3d centre_point =
+        0.25 * (mesh.point(c[0]) + mesh.point(c[1]) + mesh.point(c[2]) + mesh.point(c[3]));
+    const VertexHandle centre = mesh.add_vertex(centre_point);
+    const HalfedgeHandle across = connect(mesh, f, mid[0], mid[2]);  // f keeps the c1, c2 half
+    const FaceHandle other = mesh.face_handle(across);               // the c3, c0 half
+    mesh.split_edge(mesh.edge_handle(across), centre);
+    connect(mesh, f, mid[1], centre);
+    connect(mesh, other, mid[3], centre);
+    for (int k = 0; k < 4; ++k) {
+      child_corners[static_cast<std::size_t>(k)] = {c[static_cast<std::size_t>(k)].idx(), mid[static_cast<std::size_t>(k)].idx(),
+                                                    centre.idx(), mid[static_cast<std::size_t>((k + 3) % 4)].idx()};
+      child_face[static_cast<std::size_t>(k)] = mesh.face_handle(out_of_corner[static_cast<std::size_t>(k)]);
+    }
+  } else {
+    const HalfedgeHandle h01 = connect(mesh, f, mid[0], mid[1]);  // f keeps corner 1
+    const FaceHandle rest = mesh.face_handle(h01);
+    const HalfedgeHandle h12 = connect(mesh, rest, mid[1], mid[2]);  // rest keeps corner 2
+    const HalfedgeHandle h20 = connect(mesh, mesh.face_handle(h12), mid[2], mid[0]);
+    for (int k = 0; k < 3; ++k) {
+      child_corners[static_cast<std::size_t>(k)] = {c[static_cast<std::size_t>(k)].idx(), mid[static_cast<std::size_t>(k)].idx(),
+                                                    mid[static_cast<std::size_t>((k + 2) % 3)].idx(), -1};
+      child_face[static_cast<std::size_t>(k)] = mesh.face_handle(out_of_corner[static_cast<std::size_t>(k)]);
+    }
+    child_corners[3] = {mid[0].idx(), mid[1].idx(), mid[2].idx(), -1};
+    child_face[3] = mesh.face_handle(h20);
+  }
+
+  std::array<NodeId, 4> ids;
+  m.child_begin[node] = static_cast<std::uint32_t>(m.child_ids.size());
+  m.child_count[node] = 4;
+  m.face[node] = -1;
+  for (int k = 0; k < 4; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    ids[ku] = m.add_node(node, m.level[node] + 1, m.patch_of[node], m.surface[node], child_corners[ku]);
+    m.child_ids.push_back(ids[ku]);
+    m.radiosity[ids[ku]] = m.radiosity[node];
+    m.face[ids[ku]] = child_face[ku].idx();
+    mesh.property(m.face_node, child_face[ku]) = ids[ku];
+  }
+  m.leaf_count += 3;
+  ++m.revision;
+  return ids;
+}
+
+void Hierarchy::split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_split) {
+  std::vector<NodeId> neighbours;
+  for (bool again = true; again;) {
+    again = false;
+    edge_neighbours(node, neighbours);
+    for (NodeId nb : neighbours)
+      if (impl_->level[nb] < impl_->level[node]) {
+        split_coarser_neighbours(nb, also_split);
+        split_leaf(nb);
+        also_split.push_back(nb);
+        again = true;
+        break;
+      }
+  }
+}
+
+SplitResult Hierarchy::split(NodeId node) {
+  SplitResult result;
+  const Impl& m = *impl_;
+  if (node >= node_count()) {
+    result.reason = "node " + std::to_string(node) + " does not exist (" + std::to_string(node_count()) + " nodes)";
+    return result;
+  }
+  if (!is_leaf(node)) {
+    result.reason = "node " + std::to_string(node) + " is not a leaf";
+    return result;
+  }
+  if (m.level[node] >= m.options.max_level) {
+    result.reason = "node " + std::to_string(node) + " is at the maximum level " + std::to_string(m.options.max_level);
+    return result;
+  }
+  // Children's areas from the corner positions the split will create (the same expressions).
+  const int n = m.corner_count(node);
+  std::array<Vec3, 4> c, mid;
+  for (int k = 0; k < n; ++k) c[static_cast<std::size_t>(k)] = m.point(m.corners[node][static_cast<std::size_t>(k)]);
+  for (int k = 0; k < n; ++k) mid[static_cast<std::size_t>(k)] = 0.5 * (c[static_cast<std::size_t>(k)] + c[static_cast<std::size_t>((k + 1) % n)]);
+  double smallest = 0.0;
+  if (n == 4) {
+    const Vec3 centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
+    smallest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 4; ++k) {
+      const std::array<Vec3, 4> q{c[static_cast<std::size_t>(k)], mid[static_cast<std::size_t>(k)], centre, mid[static_cast<std::size_t>((k + 3) % 4)]};
+      smallest = std::min(smallest, aarad::area(q));
+    }
+  } else {
+    smallest = m.area[node] / 4.0;  // the four children of a triangle are congruent up to rounding
+  }
+  if (smallest < m.options.min_area) {
+    result.reason = "node " + std::to_string(node) + ": a child would have area " + std::to_string(smallest) +
+                    ", below min_area " + std::to_string(m.options.min_area);
+    return result;
+  }
+  if (m.options.balance) split_coarser_neighbours(node, result.also_split);
+  const std::array<NodeId, 4> ids = split_leaf(node);
+  result.children.assign(ids.begin(), ids.end());
+  result.ok = true;
+  return result;
+}
+
+}  // namespace aarad::mesh

@@ -1,0 +1,229 @@
+// Initial meshing of physical surfaces into patches and elements.
+// Substructuring after Cohen, Greenberg, Immel and Brock 1986 ("An efficient radiosity approach for
+// realistic image synthesis", section 3): patches are the shooters, elements the receivers. Surfaces that are
+// not one convex quadrilateral are triangulated with CGAL's constrained Delaunay mesher (Shewchuk's / Ruppert's
+// refinement, CGAL 2D Conforming Triangulations and Meshes, Delaunay_mesher_2).
+#include "mesh/initial_meshing.h"
+
+#include "core/error.h"
+#include "core/polygon.h"
+#include "core/predicates.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_mesh_face_base_2.h>
+#include <CGAL/Delaunay_mesh_size_criteria_2.h>
+#include <CGAL/Delaunay_mesh_vertex_base_2.h>
+#include <CGAL/Delaunay_mesher_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <utility>
+
+namespace aarad::mesh {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using VertexBase = CGAL::Delaunay_mesh_vertex_base_2<Kernel>;
+using FaceBase = CGAL::Delaunay_mesh_face_base_2<Kernel>;
+using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::Exact_predicates_tag>;
+using Criteria = CGAL::Delaunay_mesh_size_criteria_2<Cdt>;
+using Point2 = Kernel::Point_2;
+
+// An orthonormal frame (u, v) in the plane with u x v = n: counter-clockwise in 2D is counter-clockwise
+// seen from the front.
+struct Frame {
+  Vec3 origin, u, v;
+  Vec2 to_2d(const Vec3& p) const { return {glm::dot(p - origin, u), glm::dot(p - origin, v)}; }
+  Vec3 to_3d(const Vec2& p) const { return origin + p.x * u + p.y * v; }
+};
+
+Frame frame_of(const Plane& plane, const Vec3& origin) {
+  const Vec3 n = plane.normal;
+  const Vec3 axis = std::abs(n.x) < 0.6 ? Vec3(1, 0, 0) : (std::abs(n.y) < 0.6 ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
+  const Vec3 u = glm::normalize(glm::cross(axis, n));
+  return {origin, u, glm::cross(n, u)};
+}
+
+int divisions(double length, double size) { return std::max(1, static_cast<int>(std::ceil(length / size - 1e-9))); }
+
+bool strictly_convex_quad(std::span<const Vec3> polygon, const Frame& frame) {
+  if (polygon.size() != 4) return false;
+  std::array<Vec2, 4> p;
+  for (int i = 0; i < 4; ++i) p[i] = frame.to_2d(polygon[i]);
+  for (int i = 0; i < 4; ++i)
+    if (orientation(p[i], p[(i + 1) % 4], p[(i + 2) % 4]) != Sign::kPositive) return false;
+  return true;
+}
+
+// One convex quadrilateral: a global bilinear grid of (nx ex) x (ny ey) points; patch (i, j) covers
+// ex x ey grid cells, each cell an element.
+SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, double element_size) {
+  const double lu = std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3]));
+  const double lv = std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1]));
+  const int nx = divisions(lu, patch_size), ny = divisions(lv, patch_size);
+  const int ex = divisions(lu / nx, element_size), ey = divisions(lv / ny, element_size);
+  const int gx = nx * ex, gy = ny * ey;
+  SurfaceMeshing out;
+  out.points.reserve(static_cast<std::size_t>(gx + 1) * (gy + 1));
+  for (int j = 0; j <= gy; ++j)
+    for (int i = 0; i <= gx; ++i) {
+      const double s = static_cast<double>(i) / gx, t = static_cast<double>(j) / gy;
+      out.points.push_back((1 - s) * (1 - t) * c[0] + s * (1 - t) * c[1] + s * t * c[2] + (1 - s) * t * c[3]);
+    }
+  auto index = [&](int i, int j) { return j * (gx + 1) + i; };
+  for (int pj = 0; pj < ny; ++pj)
+    for (int pi = 0; pi < nx; ++pi) {
+      const int i0 = pi * ex, j0 = pj * ey;
+      out.patches.push_back({index(i0, j0), index(i0 + ex, j0), index(i0 + ex, j0 + ey), index(i0, j0 + ey)});
+      std::vector<CornerIndices> elements;
+      for (int j = j0; j < j0 + ey; ++j)
+        for (int i = i0; i < i0 + ex; ++i)
+          elements.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)});
+      out.elements.push_back(std::move(elements));
+    }
+  return out;
+}
+
+// Crossing-number test of a point against a simple polygon (2D); points on the boundary may go either way,
+// which is fine for the triangle centroids it is asked about (they are never on a constraint).
+bool inside(const std::vector<Vec2>& polygon, const Vec2& p) {
+  bool in = false;
+  for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const Vec2& a = polygon[i];
+    const Vec2& b = polygon[j];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+// Any other surface: constrained Delaunay mesh of the union of its faces, then m x m similar triangles per
+// patch. Points on a patch edge are computed from the edge's lower-index end, so both patches sharing the
+// edge get bit-identical points.
+SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double patch_size, double element_size) {
+  const Frame frame = frame_of(surface.plane, scene.faces[surface.faces.front()].vertices.front());
+  std::vector<std::vector<Vec2>> polygons;
+  std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
+  Cdt cdt;
+  for (const std::uint32_t fi : surface.faces) {
+    const Face& face = scene.faces[fi];
+    std::vector<Vec2> polygon;
+    for (const Vec3& v : face.vertices) {
+      polygon.push_back(frame.to_2d(v));
+      original.emplace(std::make_pair(polygon.back().x, polygon.back().y), v);
+    }
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+      const Vec2& a = polygon[i];
+      const Vec2& b = polygon[(i + 1) % polygon.size()];
+      if (a != b) cdt.insert_constraint(Point2(a.x, a.y), Point2(b.x, b.y));
+    }
+    polygons.push_back(std::move(polygon));
+  }
+  auto in_domain = [&](const Vec2& p) {
+    return std::any_of(polygons.begin(), polygons.end(), [&](const auto& poly) { return inside(poly, p); });
+  };
+  std::vector<Point2> seeds;  // one point in every region outside the surface (holes), which is not meshed
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    const Point2 c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
+    if (!in_domain({c.x(), c.y()})) seeds.push_back(c);
+  }
+  CGAL::refine_Delaunay_mesh_2(cdt, seeds.begin(), seeds.end(), Criteria(0.125, patch_size), false);
+
+  SurfaceMeshing out;
+  std::map<Cdt::Vertex_handle, int> vertex_index;
+  auto index_of = [&](Cdt::Vertex_handle v) {
+    auto [it, inserted] = vertex_index.emplace(v, static_cast<int>(out.points.size()));
+    if (inserted) {
+      const auto found = original.find({v->point().x(), v->point().y()});
+      out.points.push_back(found != original.end() ? found->second
+                                                   : frame.to_3d({v->point().x(), v->point().y()}));
+    }
+    return it->second;
+  };
+  double longest = 0.0;
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    if (!f->is_in_domain()) continue;
+    const CornerIndices patch{index_of(f->vertex(0)), index_of(f->vertex(1)), index_of(f->vertex(2)), -1};
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(longest, glm::length(out.points[patch[(k + 1) % 3]] - out.points[patch[k]]));
+    out.patches.push_back(patch);
+  }
+  if (out.patches.empty())
+    throw Error("initial meshing: surface of group '" + scene.groups[surface.group].name + "' has no area to mesh");
+  const int m = divisions(longest, element_size);
+
+  // Points along patch edges, keyed by the edge's (lower, higher) point index.
+  std::map<std::pair<int, int>, std::vector<int>> edge_points;
+  auto edge_point = [&](int a, int b, int k) {  // point k of m along a -> b, 0 < k < m
+    const bool flipped = a > b;
+    const int lo = flipped ? b : a, hi = flipped ? a : b;
+    auto [it, inserted] = edge_points.try_emplace({lo, hi});
+    if (inserted)
+      for (int i = 1; i < m; ++i) {
+        const double t = static_cast<double>(i) / m;
+        it->second.push_back(static_cast<int>(out.points.size()));
+        out.points.push_back((1 - t) * out.points[lo] + t * out.points[hi]);
+      }
+    return it->second[flipped ? m - k - 1 : k - 1];
+  };
+  for (const CornerIndices& patch : out.patches) {
+    const int a = patch[0], b = patch[1], c = patch[2];
+    // Grid point (i, j), i + j <= m: a + i/m (b - a) + j/m (c - a).
+    std::vector<int> grid(static_cast<std::size_t>((m + 1) * (m + 1)), -1);
+    auto at = [&](int i, int j) -> int& { return grid[static_cast<std::size_t>(j * (m + 1) + i)]; };
+    for (int j = 0; j <= m; ++j)
+      for (int i = 0; i + j <= m; ++i) {
+        int& g = at(i, j);
+        if (i == 0 && j == 0) g = a;
+        else if (i == m) g = b;
+        else if (j == m) g = c;
+        else if (j == 0) g = edge_point(a, b, i);
+        else if (i == 0) g = edge_point(a, c, j);
+        else if (i + j == m) g = edge_point(b, c, j);
+        else {
+          g = static_cast<int>(out.points.size());
+          const double s = static_cast<double>(i) / m, t = static_cast<double>(j) / m;
+          out.points.push_back(out.points[a] + s * (out.points[b] - out.points[a]) + t * (out.points[c] - out.points[a]));
+        }
+      }
+    std::vector<CornerIndices> elements;
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i + j < m; ++i) {
+        elements.push_back({at(i, j), at(i + 1, j), at(i, j + 1), -1});
+        if (i + j + 1 < m) elements.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), -1});
+      }
+    out.elements.push_back(std::move(elements));
+  }
+  return out;
+}
+
+}  // namespace
+
+MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options) {
+  MeshingOptions resolved = options;
+  const double d = scene.diagonal();
+  if (!(d > 0.0)) throw Error("meshing: the scene has no extent (diagonal " + std::to_string(d) + ")");
+  if (options.patch_size < 0.0 || options.element_size < 0.0 || options.min_area < 0.0)
+    throw Error("meshing: patch_size, element_size and min_area must be >= 0 (0 picks a default)");
+  if (options.max_level < 1 || options.max_level > 60)
+    throw Error("meshing: max_level must lie in [1, 60], got " + std::to_string(options.max_level));
+  if (resolved.patch_size == 0.0) resolved.patch_size = d / 8.0;
+  if (resolved.element_size == 0.0) resolved.element_size = resolved.patch_size / 2.0;
+  if (resolved.min_area == 0.0) resolved.min_area = 1e-7 * d * d;
+  return resolved;
+}
+
+SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double patch_size, double element_size) {
+  const Surface& surface = scene.surfaces.at(surface_id);
+  if (surface.faces.size() == 1) {
+    const std::vector<Vec3>& polygon = scene.faces[surface.faces.front()].vertices;
+    if (strictly_convex_quad(polygon, frame_of(surface.plane, polygon.front())))
+      return mesh_convex_quad(polygon, patch_size, element_size);
+  }
+  return mesh_general(scene, surface, patch_size, element_size);
+}
+
+}  // namespace aarad::mesh

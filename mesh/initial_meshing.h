@@ -1,0 +1,36 @@
+// Initial meshing of the physical surfaces of a scene into patches and elements (Cohen, Greenberg, Immel and
+// Brock 1986: patches shoot, elements receive). See docs/hierarchy.md for the choices.
+#pragma once
+
+#include "core/scene.h"
+#include "mesh/hierarchy.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace aarad::mesh {
+
+// Defaults relative to the scene diagonal d: patch_size = d / 8, element_size = patch_size / 2,
+// min_area = 1e-7 d^2. Fields that are not zero are kept. Throws aarad::Error for negative sizes or a
+// max_level outside [1, 60].
+MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options);
+
+// A polygon of 3 or 4 point indices, counter-clockwise seen from the surface's front; [3] = -1 for a triangle.
+using CornerIndices = std::array<int, 4>;
+
+// The conforming initial meshing of one physical surface: elements touching along an edge share its points.
+struct SurfaceMeshing {
+  std::vector<Vec3> points;
+  std::vector<CornerIndices> patches;
+  std::vector<std::vector<CornerIndices>> elements;  // per patch; they tile it
+};
+
+// A surface that is one strictly convex quadrilateral becomes a bilinear grid of quad patches (no edge
+// longer than patch_size), each patch an equal grid of quad elements (no edge longer than element_size).
+// Any other surface (triangles, concave faces, several faces, holes) is the union of its faces, triangulated
+// by a constrained Delaunay mesher (CGAL) into triangle patches with edges no longer than patch_size, each
+// patch divided into m x m similar triangles (m the same over the surface, so patches conform).
+SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size);
+
+}  // namespace aarad::mesh

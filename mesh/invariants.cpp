@@ -1,0 +1,407 @@
+// The subdivision-invariant checker (../shared/design.md, "Subdivision invariants"; docs/hierarchy.md lists
+// each invariant with its tolerance). Every loop over the half-edge structure is capped, so a corrupted mesh
+// is reported, never walked forever.
+#include "mesh/invariants.h"
+
+#include "core/polygon.h"
+#include "mesh/leaf_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace aarad::mesh {
+namespace {
+
+using VertexHandle = LeafMesh::VertexHandle;
+using HalfedgeHandle = LeafMesh::HalfedgeHandle;
+using FaceHandle = LeafMesh::FaceHandle;
+
+constexpr double kAreaTolerance = 1e-12;       // children areas sum to the parent's, relative
+constexpr double kLengthTolerance = 1e-9;      // positions, relative to the scene diagonal
+constexpr double kRadiosityTolerance = 1e-9;   // area-weighted mean, relative to the radiosity
+
+class Checker {
+ public:
+  explicit Checker(const Hierarchy& h) : h_(h), m_(h.impl()), mesh_(m_.mesh) {
+    length_tolerance_ = kLengthTolerance * m_.scene.diagonal();
+  }
+
+  std::vector<Violation> run() {
+    check_tree();
+    check_face_map();
+    const bool mesh_ok = check_half_edges();
+    if (mesh_ok) {
+      check_boundary();
+      check_hanging_vertices();
+      if (m_.options.balance) check_balance();
+    }
+    check_tiling();
+    check_radiosity();
+    return std::move(violations_);
+  }
+
+ private:
+  template <typename... Parts>
+  void report(const char* invariant, NodeId node, const Parts&... parts) {
+    std::ostringstream message;
+    message.precision(17);
+    (message << ... << parts);
+    violations_.push_back({invariant, node, message.str()});
+  }
+
+  bool face_deleted(FaceHandle f) const { return mesh_.has_face_status() && mesh_.status(f).deleted(); }
+  bool halfedge_deleted(HalfedgeHandle h) const {
+    return mesh_.has_edge_status() && mesh_.status(mesh_.edge_handle(h)).deleted();
+  }
+  bool valid_node(NodeId n) const { return n < m_.parent.size(); }
+  Vec3 point(VertexHandle v) const { return to_vec3(mesh_.point(v)); }
+
+  // The vertices of face f's loop from its halfedge, or false when the loop does not close within the cap.
+  bool loop_of(FaceHandle f, std::vector<VertexHandle>& out) const {
+    out.clear();
+    const HalfedgeHandle start = mesh_.halfedge_handle(f);
+    if (!start.is_valid() || start.idx() >= static_cast<int>(mesh_.n_halfedges())) return false;
+    HalfedgeHandle h = start;
+    for (std::size_t i = 0; i <= mesh_.n_halfedges(); ++i) {
+      out.push_back(mesh_.from_vertex_handle(h));
+      h = mesh_.next_halfedge_handle(h);
+      if (h == start) return true;
+      if (!h.is_valid() || mesh_.face_handle(h) != f) return false;
+    }
+    return false;
+  }
+
+  void check_tree() {
+    std::size_t roots = 0;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      const NodeId p = m_.parent[n];
+      if (p == kNoNode) {
+        ++roots;
+        if (m_.level[n] != 0) report("levels-parents", n, "patch ", n, " has level ", int(m_.level[n]), ", not 0");
+        if (m_.patch_of[n] != n) report("levels-parents", n, "patch ", n, " names patch ", m_.patch_of[n]);
+        continue;
+      }
+      if (!valid_node(p)) {
+        report("levels-parents", n, "node ", n, " has parent ", p, ", which does not exist");
+        continue;
+      }
+      const auto siblings = h_.children(p);
+      if (std::find(siblings.begin(), siblings.end(), n) == siblings.end())
+        report("levels-parents", n, "node ", n, " names parent ", p, ", which does not list it as a child");
+      if (m_.level[n] != m_.level[p] + 1)
+        report("levels-parents", n, "node ", n, " has level ", int(m_.level[n]), " under parent ", p, " of level ",
+               int(m_.level[p]));
+      if (m_.patch_of[n] != m_.patch_of[p] || m_.surface[n] != m_.surface[p])
+        report("levels-parents", n, "node ", n, " has patch ", m_.patch_of[n], " and surface ", m_.surface[n],
+               ", its parent patch ", m_.patch_of[p], " and surface ", m_.surface[p]);
+      if (m_.level[n] > m_.options.max_level)
+        report("levels-parents", n, "node ", n, " has level ", int(m_.level[n]), " above max_level ", m_.options.max_level);
+    }
+    for (NodeId n = 0; n < m_.parent.size(); ++n)
+      for (NodeId c : h_.children(n))
+        if (!valid_node(c) || m_.parent[c] != n)
+          report("levels-parents", n, "node ", n, " lists child ", c, ", whose parent is not ", n);
+    if (roots != m_.patch_ids.size())
+      report("levels-parents", kNoNode, roots, " nodes without a parent but ", m_.patch_ids.size(), " patches");
+  }
+
+  void check_face_map() {
+    std::size_t leaves = 0;
+    std::vector<VertexHandle> loop;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      const int fi = m_.face[n];
+      if (!h_.is_leaf(n)) {
+        if (fi != -1) report("face-node-map", n, "inner node ", n, " still names face ", fi);
+        continue;
+      }
+      ++leaves;
+      if (fi < 0 || fi >= static_cast<int>(mesh_.n_faces()) || face_deleted(FaceHandle(fi))) {
+        report("face-node-map", n, "leaf ", n, " has no face (face index ", fi, ")");
+        continue;
+      }
+      if (mesh_.property(m_.face_node, FaceHandle(fi)) != n)
+        report("face-node-map", n, "leaf ", n, " names face ", fi, ", which maps to node ",
+               mesh_.property(m_.face_node, FaceHandle(fi)));
+      // Its corners lie on its face loop, in counter-clockwise order.
+      if (!loop_of(FaceHandle(fi), loop)) continue;  // reported by check_half_edges
+      std::vector<std::size_t> at;
+      for (int k = 0; k < m_.corner_count(n); ++k) {
+        const auto it = std::find(loop.begin(), loop.end(), VertexHandle(m_.corners[n][static_cast<std::size_t>(k)]));
+        if (it == loop.end()) break;
+        at.push_back(static_cast<std::size_t>(it - loop.begin()));
+      }
+      std::size_t rotations = 0;
+      for (std::size_t k = 0; k < at.size(); ++k) rotations += at[(k + 1) % at.size()] < at[k];
+      if (at.size() != static_cast<std::size_t>(m_.corner_count(n)) || rotations != 1)
+        report("face-node-map", n, "the corners of leaf ", n, " are not on its face loop in order");
+    }
+    for (auto f : mesh_.faces()) {
+      const NodeId n = mesh_.property(m_.face_node, f);
+      if (!valid_node(n) || !h_.is_leaf(n) || m_.face[n] != f.idx())
+        report("face-node-map", valid_node(n) ? n : kNoNode, "face ", f.idx(), " maps to node ", n,
+               ", which is not a leaf owning that face");
+    }
+    if (leaves != m_.leaf_count || leaves != mesh_.n_faces() - count_deleted_faces())
+      report("face-node-map", kNoNode, leaves, " leaves, leaf_count ", m_.leaf_count, ", ",
+             mesh_.n_faces() - count_deleted_faces(), " faces");
+  }
+
+  std::size_t count_deleted_faces() const {
+    if (!mesh_.has_face_status()) return 0;
+    std::size_t deleted = 0;
+    for (std::size_t i = 0; i < mesh_.n_faces(); ++i) deleted += mesh_.status(FaceHandle(static_cast<int>(i))).deleted();
+    return deleted;
+  }
+
+  // A valid manifold half-edge structure: links agree, loops close, vertices are manifold.
+  bool check_half_edges() {
+    bool ok = true;
+    const int nh = static_cast<int>(mesh_.n_halfedges());
+    for (int i = 0; i < nh; ++i) {
+      const HalfedgeHandle h(i);
+      if (halfedge_deleted(h)) continue;
+      const HalfedgeHandle next = mesh_.next_halfedge_handle(h), prev = mesh_.prev_halfedge_handle(h);
+      if (!next.is_valid() || next.idx() >= nh || !prev.is_valid() || prev.idx() >= nh ||
+          mesh_.prev_halfedge_handle(next) != h || mesh_.next_halfedge_handle(prev) != h ||
+          mesh_.from_vertex_handle(next) != mesh_.to_vertex_handle(h) ||
+          mesh_.face_handle(next) != mesh_.face_handle(h)) {
+        const FaceHandle f = mesh_.face_handle(h);
+        report("leaf-mesh-manifold", f.is_valid() ? mesh_.property(m_.face_node, f) : kNoNode, "halfedge ", i,
+               ": next/prev links or faces disagree");
+        ok = false;
+      }
+      if (mesh_.to_vertex_handle(h) == mesh_.from_vertex_handle(h)) {
+        report("leaf-mesh-manifold", kNoNode, "halfedge ", i, " starts and ends at vertex ", mesh_.to_vertex_handle(h).idx());
+        ok = false;
+      }
+    }
+    if (!ok) return false;
+    std::vector<VertexHandle> loop;
+    for (auto f : mesh_.faces()) {
+      const NodeId n = mesh_.property(m_.face_node, f);
+      if (!loop_of(f, loop) || loop.size() < 3) {
+        report("leaf-mesh-manifold", n, "face ", f.idx(), " has no closed loop of at least 3 vertices");
+        ok = false;
+        continue;
+      }
+      std::sort(loop.begin(), loop.end());
+      if (std::adjacent_find(loop.begin(), loop.end()) != loop.end()) {
+        report("leaf-mesh-manifold", n, "face ", f.idx(), " visits a vertex twice");
+        ok = false;
+      }
+    }
+    if (!ok) return false;
+    for (auto v : mesh_.vertices()) {
+      std::size_t boundary_out = 0, out = 0;
+      for (auto h : mesh_.voh_range(v)) {
+        boundary_out += h.is_boundary();
+        if (++out > mesh_.n_halfedges()) break;
+      }
+      if (boundary_out > 1 || out == 0) {
+        report("leaf-mesh-manifold", kNoNode, "vertex ", v.idx(), out == 0 ? " is isolated" : " is not manifold (",
+               boundary_out, out == 0 ? "" : " boundary gaps)");
+        ok = false;
+      }
+    }
+    return ok;
+  }
+
+  // No crack: every boundary halfedge lies on the initial outer boundary of its surface, and that boundary's
+  // length is unchanged. Across every inner edge both faces belong to one surface.
+  void check_boundary() {
+    std::vector<double> length(m_.boundaries.size(), 0.0);
+    for (auto h : mesh_.halfedges()) {
+      if (halfedge_deleted(h)) continue;
+      const FaceHandle inner = mesh_.face_handle(h.opp());
+      if (!h.is_boundary()) {
+        if (inner.is_valid()) {
+          const NodeId a = mesh_.property(m_.face_node, h.face()), b = mesh_.property(m_.face_node, inner);
+          if (valid_node(a) && valid_node(b) && m_.surface[a] != m_.surface[b])
+            report("surface-component", a, "leaves ", a, " and ", b, " share an edge but lie on surfaces ",
+                   m_.surface[a], " and ", m_.surface[b]);
+        }
+        continue;
+      }
+      if (!inner.is_valid()) {
+        report("no-crack", kNoNode, "edge ", h.edge().idx(), " has no face on either side");
+        continue;
+      }
+      const NodeId n = mesh_.property(m_.face_node, inner);
+      if (!valid_node(n)) continue;
+      const std::uint32_t s = m_.surface[n];
+      const Vec3 a = point(h.from()), b = point(h.to());
+      length[s] += glm::length(b - a);
+      const bool on_boundary = std::any_of(m_.boundaries[s].segments.begin(), m_.boundaries[s].segments.end(),
+                                           [&](const auto& seg) { return on_segment(a, seg) && on_segment(b, seg); });
+      if (!on_boundary)
+        report("no-crack", n, "leaf ", n, " has an open edge (", a.x, ", ", a.y, ", ", a.z, ") - (", b.x, ", ", b.y,
+               ", ", b.z, ") inside surface ", s, ": a crack");
+    }
+    for (std::size_t s = 0; s < length.size(); ++s)
+      if (std::abs(length[s] - m_.boundaries[s].length) > 1e-9 * m_.boundaries[s].length)
+        report("outer-boundary", kNoNode, "surface ", s, " has outer boundary length ", length[s], ", initially ",
+               m_.boundaries[s].length);
+  }
+
+  bool on_segment(const Vec3& p, const std::array<Vec3, 2>& seg) const {
+    const Vec3 d = seg[1] - seg[0];
+    const double t = glm::dot(p - seg[0], d) / glm::dot(d, d);
+    const double slack = length_tolerance_ / glm::length(d);
+    return t >= -slack && t <= 1.0 + slack && glm::length(seg[0] + t * d - p) <= length_tolerance_;
+  }
+
+  // Between two consecutive corners of a leaf, the other loop vertices lie on the straight edge, in order.
+  void check_hanging_vertices() {
+    std::vector<VertexHandle> loop;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (!h_.is_leaf(n) || m_.face[n] < 0 || !loop_of(FaceHandle(m_.face[n]), loop)) continue;
+      const int corners = m_.corner_count(n);
+      const auto first = std::find(loop.begin(), loop.end(), VertexHandle(m_.corners[n][0]));
+      if (first == loop.end()) continue;  // reported by check_face_map
+      std::rotate(loop.begin(), first, loop.end());
+      int k = 0;
+      double last_t = 0.0;
+      for (std::size_t i = 1; i <= loop.size(); ++i) {
+        const VertexHandle v = loop[i % loop.size()];
+        const int next_corner = m_.corners[n][static_cast<std::size_t>((k + 1) % corners)];
+        if (v.idx() == next_corner) {
+          k = (k + 1) % corners;
+          last_t = 0.0;
+          continue;
+        }
+        const Vec3 a = m_.point(m_.corners[n][static_cast<std::size_t>(k)]), b = m_.point(next_corner);
+        const Vec3 d = b - a, p = point(v);
+        const double t = glm::dot(p - a, d) / glm::dot(d, d);
+        const double off = glm::length(a + t * d - p);
+        if (off > length_tolerance_ || t <= last_t || t >= 1.0)
+          report("hanging-vertex-on-edge", n, "vertex ", v.idx(), " of leaf ", n, " lies at parameter ", t,
+                 " and distance ", off, " from its host edge (corners ", k, " and ", (k + 1) % corners, ")");
+        last_t = t;
+      }
+    }
+  }
+
+  void check_balance() {
+    std::vector<NodeId> neighbours;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (!h_.is_leaf(n) || m_.face[n] < 0) continue;
+      h_.edge_neighbours(n, neighbours);
+      for (NodeId nb : neighbours)
+        if (valid_node(nb) && m_.level[nb] + 1 < m_.level[n])
+          report("balance", n, "leaf ", n, " of level ", int(m_.level[n]), " borders leaf ", nb, " of level ",
+                 int(m_.level[nb]));
+    }
+  }
+
+  // Children tile their parent: areas sum, corners in the parent's plane and inside it, counter-clockwise
+  // like it, no two children overlap (separating-axis test on the convex children).
+  void check_tiling() {
+    std::vector<Vec3> parent_corners, child_corners;
+    std::vector<std::vector<Vec2>> children_2d;
+    std::vector<Vec2> parent_2d;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      h_.corners(n, parent_corners);
+      const double stored = m_.area[n], actual = aarad::area(parent_corners);
+      if (std::abs(stored - actual) > kAreaTolerance * actual)
+        report("children-tile-parent", n, "node ", n, " stores area ", stored, " but its corners span ", actual);
+      const auto children = h_.children(n);
+      if (children.empty()) continue;
+      const Plane plane = plane_of(parent_corners);
+      parent_2d.resize(parent_corners.size());
+      project_to_2d(parent_corners, plane.normal, parent_2d);
+      double sum = 0.0;
+      children_2d.clear();
+      for (NodeId c : children) {
+        if (!valid_node(c)) continue;
+        h_.corners(c, child_corners);
+        sum += aarad::area(child_corners);
+        if (glm::dot(vector_area(child_corners), plane.normal) <= 0.0)
+          report("children-tile-parent", c, "child ", c, " of node ", n, " is not counter-clockwise like its parent");
+        for (const Vec3& p : child_corners)
+          if (std::abs(plane.signed_distance(p)) > length_tolerance_)
+            report("children-tile-parent", c, "a corner of child ", c, " lies ", plane.signed_distance(p),
+                   " off the plane of node ", n);
+        children_2d.emplace_back(child_corners.size());
+        project_to_2d(child_corners, plane.normal, children_2d.back());
+        for (const Vec2& p : children_2d.back())
+          if (outside(parent_2d, p))
+            report("children-tile-parent", c, "a corner of child ", c, " lies outside node ", n);
+      }
+      if (std::abs(sum - m_.area[n]) > kAreaTolerance * m_.area[n])
+        report("children-tile-parent", n, "children of node ", n, " cover ", sum, " of its area ", m_.area[n],
+               " (relative ", (sum - m_.area[n]) / m_.area[n], ")");
+      for (std::size_t i = 0; i < children_2d.size(); ++i)
+        for (std::size_t j = i + 1; j < children_2d.size(); ++j)
+          if (overlap(children_2d[i], children_2d[j]))
+            report("children-tile-parent", children[i], "children ", children[i], " and ", children[j], " of node ",
+                   n, " overlap");
+    }
+  }
+
+  // Outside a convex counter-clockwise polygon by more than the length tolerance.
+  bool outside(const std::vector<Vec2>& polygon, const Vec2& p) const {
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+      const Vec2 a = polygon[i], b = polygon[(i + 1) % polygon.size()];
+      const Vec2 d = b - a;
+      if ((d.x * (p.y - a.y) - d.y * (p.x - a.x)) / glm::length(d) < -length_tolerance_) return true;
+    }
+    return false;
+  }
+
+  // Two convex polygons overlap when no edge normal of either separates them by more than the tolerance.
+  bool overlap(const std::vector<Vec2>& a, const std::vector<Vec2>& b) const {
+    auto separated_by_edges_of = [&](const std::vector<Vec2>& p, const std::vector<Vec2>& q) {
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const Vec2 d = p[(i + 1) % p.size()] - p[i];
+        const Vec2 normal = Vec2(d.y, -d.x) / glm::length(d);  // outward for counter-clockwise p
+        double p_max = -std::numeric_limits<double>::infinity(), q_min = std::numeric_limits<double>::infinity();
+        for (const Vec2& v : p) p_max = std::max(p_max, glm::dot(v, normal));
+        for (const Vec2& v : q) q_min = std::min(q_min, glm::dot(v, normal));
+        if (q_min >= p_max - length_tolerance_) return true;
+      }
+      return false;
+    };
+    return !separated_by_edges_of(a, b) && !separated_by_edges_of(b, a);
+  }
+
+  // Every inner node's B is the area-weighted mean of the B of the leaves below it.
+  void check_radiosity() {
+    const std::size_t count = m_.parent.size();
+    std::vector<Rgb> weighted(count);
+    std::vector<double> area(count, 0.0);
+    for (std::size_t i = count; i-- > 0;) {  // children have larger ids than their parent
+      const auto n = static_cast<NodeId>(i);
+      if (h_.is_leaf(n)) {
+        weighted[n] = m_.radiosity[n] * m_.area[n];
+        area[n] = m_.area[n];
+      } else {
+        const Rgb mean = weighted[n] / area[n];
+        const Rgb& b = m_.radiosity[n];
+        for (int ch = 0; ch < 3; ++ch) {
+          const double scale = std::max(std::abs(b[ch]), std::abs(mean[ch]));
+          if (std::abs(b[ch] - mean[ch]) > kRadiosityTolerance * scale)
+            report("radiosity-mean", n, "node ", n, " has B[", ch, "] = ", b[ch], " but its leaves average ", mean[ch]);
+        }
+      }
+      const NodeId p = m_.parent[n];
+      if (p != kNoNode && valid_node(p) && p < n) {
+        weighted[p] += weighted[n];
+        area[p] += area[n];
+      }
+    }
+  }
+
+  const Hierarchy& h_;
+  const Hierarchy::Impl& m_;
+  const LeafMesh& mesh_;
+  double length_tolerance_ = 0.0;
+  std::vector<Violation> violations_;
+};
+
+}  // namespace
+
+std::vector<Violation> check_invariants(const Hierarchy& hierarchy) { return Checker(hierarchy).run(); }
+
+}  // namespace aarad::mesh
