@@ -76,6 +76,11 @@ class Scene {
   // size, same material) and fills Surface::area and Group::surfaces. Call after the last add_face.
   void build_surfaces();
 
+  // Checks what every consumer relies on: at least one face, materials with rho in [0, 1) and finite
+  // emission >= 0, finite vertices, every face in a built surface. Throws aarad::InputError naming the
+  // scene otherwise. Importers and built-ins call it before handing a scene out.
+  void validate() const;
+
   // Axis-aligned bounds and their diagonal, the scene's size for relative tolerances and defaults.
   Vec3 bounds_min() const;
   Vec3 bounds_max() const;

@@ -1,0 +1,120 @@
+// OBJ/MTL export (Wavefront OBJ and MTL as documented by Paul Bourke, "Object Files (.obj)" and "MTL
+// material format"), the inverse of core/obj_import.cpp.
+#include "core/obj_export.h"
+
+#include "core/error.h"
+
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <tuple>
+
+namespace aarad {
+namespace {
+
+// Shortest decimal text that reads back as the same double.
+std::string number(double v) {
+  if (v == 0.0) return "0";  // also turns -0 into 0
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, result.ptr);
+}
+
+std::string triple(double a, double b, double c) { return number(a) + " " + number(b) + " " + number(c); }
+
+std::string material_name(const std::string& name) {
+  std::string out = name.empty() ? std::string("unnamed") : name;
+  for (char& ch : out)
+    if (ch == ' ' || ch == '\t') ch = '_';
+  return out;
+}
+
+std::string comment_lines(const std::string& comment) {
+  std::string out;
+  if (comment.empty()) return out;
+  std::istringstream in(comment);
+  std::string line;
+  while (std::getline(in, line)) out += line.empty() ? "#\n" : "# " + line + "\n";
+  return out;
+}
+
+void write_whole(const std::filesystem::path& path, const std::string& text) {
+  // Under a temporary name first, so the file is whole or absent.
+  const std::filesystem::path temporary = path.string() + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) throw Error(path.string() + ": cannot write the file; check that its folder exists and is writable");
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) throw Error(path.string() + ": cannot write the file (" + ec.message() + ")");
+}
+
+}  // namespace
+
+std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const std::string& comment) {
+  std::ostringstream out;
+  out << comment_lines(comment);
+  if (scene.camera) {
+    const Camera& c = *scene.camera;
+    out << "# aarad camera: eye " << triple(c.eye.x, c.eye.y, c.eye.z) << " forward "
+        << triple(c.forward.x, c.forward.y, c.forward.z) << " up " << triple(c.up.x, c.up.y, c.up.z)
+        << " vertical_fov " << number(c.vertical_fov) << "\n";
+  }
+  out << "mtllib " << mtl_file_name << "\n";
+
+  // Distinct vertices in order of first use, numbered from 1.
+  std::map<std::tuple<double, double, double>, std::size_t> index;
+  std::vector<std::vector<std::size_t>> face_indices(scene.faces.size());
+  for (const Group& g : scene.groups)
+    for (const std::uint32_t fi : g.faces)
+      for (const Vec3& v : scene.faces[fi].vertices) {
+        const auto key = std::make_tuple(v.x == 0.0 ? 0.0 : v.x, v.y == 0.0 ? 0.0 : v.y, v.z == 0.0 ? 0.0 : v.z);
+        const auto [it, inserted] = index.try_emplace(key, index.size() + 1);
+        if (inserted) out << "v " << triple(v.x, v.y, v.z) << "\n";
+        face_indices[fi].push_back(it->second);
+      }
+
+  for (const Group& g : scene.groups) {
+    if (g.faces.empty()) continue;
+    out << "o " << g.name << "\n";
+    std::optional<std::uint32_t> material;
+    for (const std::uint32_t fi : g.faces) {
+      const Face& f = scene.faces[fi];
+      if (material != f.material) {
+        material = f.material;
+        out << "usemtl " << material_name(scene.materials[f.material].name) << "\n";
+      }
+      out << "f";
+      for (const std::size_t i : face_indices[fi]) out << " " << i;
+      out << "\n";
+    }
+  }
+  return out.str();
+}
+
+std::string mtl_text(const Scene& scene, const std::string& comment) {
+  std::ostringstream out;
+  out << comment_lines(comment);
+  for (const Material& m : scene.materials) {
+    out << "newmtl " << material_name(m.name) << "\n";
+    out << "Kd " << triple(m.reflectance.r, m.reflectance.g, m.reflectance.b) << "\n";
+    out << "Ke " << triple(m.emission.r, m.emission.g, m.emission.b) << "\n";
+  }
+  return out.str();
+}
+
+void write_obj(const Scene& scene, const std::string& obj_path, const std::string& comment) {
+  const std::filesystem::path obj(obj_path);
+  std::filesystem::path mtl = obj;
+  mtl.replace_extension(".mtl");
+  write_whole(mtl, mtl_text(scene, comment));
+  write_whole(obj, obj_text(scene, mtl.filename().string(), comment));
+}
+
+}  // namespace aarad

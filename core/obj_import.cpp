@@ -1,0 +1,452 @@
+// OBJ/MTL import (see obj_import.h for the contract). Structure from tinyobjloader
+// (https://github.com/tinyobjloader/tinyobjloader, 2.0.0rc10, double precision); line numbers, exact
+// coordinates and material values from a second, line-by-line read of the files. Non-planar faces are
+// split by ear clipping (Meisters, "Polygons have ears", Amer. Math. Monthly 82, 1975) on the face's
+// projection, with CGAL's exact orientation predicates deciding convexity and containment.
+#include "core/obj_import.h"
+
+#include "core/error.h"
+#include "core/polygon.h"
+#include "core/predicates.h"
+
+// The CMake target defines it too; the header must see it in any case (double-precision real_t).
+#ifndef TINYOBJLOADER_USE_DOUBLE
+#define TINYOBJLOADER_USE_DOUBLE
+#endif
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+namespace aarad {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A face is planar when no vertex lies farther than this fraction of its bounding-box diagonal from its
+// plane; its area is zero when below this fraction of the squared diagonal.
+constexpr double kPlanarity = 1e-6;
+constexpr double kZeroArea = 1e-12;
+
+std::vector<std::string> split_tokens(const std::string& line) {
+  std::vector<std::string> tokens;
+  std::istringstream in(line);
+  std::string t;
+  while (in >> t) tokens.push_back(t);
+  return tokens;
+}
+
+std::string trim(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return {};
+  const auto last = s.find_last_not_of(" \t\r\n");
+  return s.substr(first, last - first + 1);
+}
+
+// strtod over a whole token: nullopt when the token is not a number. NaN and infinity parse (and are
+// rejected by the callers with a message that says so).
+std::optional<double> parse_number(const std::string& token) {
+  const char* begin = token.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(begin, &end);
+  if (end == begin || *end != '\0') return std::nullopt;
+  return value;
+}
+
+std::string number_text(double v) {
+  std::ostringstream out;
+  out.precision(10);
+  out << v;
+  return out.str();
+}
+
+std::string rgb_text(const Rgb& c) { return number_text(c.r) + " " + number_text(c.g) + " " + number_text(c.b); }
+
+// What the line-by-line read of the OBJ file finds.
+struct ObjText {
+  std::vector<Vec3> positions;   // every `v`, parsed with strtod
+  std::vector<int> face_lines;   // line of every `f` with at least three vertex references, in order
+  std::vector<std::pair<int, std::string>> material_libraries;  // (line, file name) per `mtllib` entry
+  std::vector<std::pair<int, std::string>> material_uses;       // (line, name) per `usemtl`
+  std::optional<Camera> camera;
+};
+
+std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t) {
+  // # aarad camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS
+  if (t.size() != 14 || t[4] != "forward" || t[8] != "up" || t[12] != "vertical_fov" || t[0] != "eye") return std::nullopt;
+  std::array<double, 10> v{};
+  const std::array<int, 10> at{1, 2, 3, 5, 6, 7, 9, 10, 11, 13};
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const auto n = parse_number(t[static_cast<std::size_t>(at[i])]);
+    if (!n || !std::isfinite(*n)) return std::nullopt;
+    v[i] = *n;
+  }
+  Camera camera;
+  camera.eye = Vec3(v[0], v[1], v[2]);
+  camera.forward = Vec3(v[3], v[4], v[5]);
+  camera.up = Vec3(v[6], v[7], v[8]);
+  camera.vertical_fov = v[9];
+  const double lf = glm::length(camera.forward), lu = glm::length(camera.up);
+  if (lf == 0.0 || lu == 0.0 || !(camera.vertical_fov > 0.0 && camera.vertical_fov < kPi)) return std::nullopt;
+  camera.forward /= lf;
+  camera.up -= glm::dot(camera.up, camera.forward) * camera.forward;
+  if (glm::length(camera.up) < 1e-9) return std::nullopt;
+  camera.up = glm::normalize(camera.up);
+  return camera;
+}
+
+ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std::string>& warnings) {
+  ObjText text;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::vector<std::string> t = split_tokens(line);
+    if (t.empty()) continue;
+    const std::string& key = t[0];
+    if (key == "v") {
+      if (t.size() < 4)
+        throw InputError(path, number, "a vertex needs three coordinates ('v x y z'); complete or remove this line");
+      Vec3 p;
+      for (int c = 0; c < 3; ++c) {
+        const auto value = parse_number(t[static_cast<std::size_t>(c + 1)]);
+        if (!value)
+          throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
+                                             "' is not a number; write a finite decimal number");
+        if (!std::isfinite(*value))
+          throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
+                                             "' is not finite (NaN or infinity); replace it with a finite number");
+        p[c] = *value;
+      }
+      text.positions.push_back(p);
+    } else if (key == "f") {
+      if (t.size() < 4) {
+        warnings.push_back(InputError::format(path, number, "face with fewer than three vertices skipped; give it "
+                                                            "at least three vertices or remove it"));
+      } else {
+        text.face_lines.push_back(number);
+      }
+    } else if (key == "mtllib") {
+      for (std::size_t i = 1; i < t.size(); ++i) text.material_libraries.emplace_back(number, t[i]);
+    } else if (key == "usemtl") {
+      text.material_uses.emplace_back(number, t.size() > 1 ? t[1] : std::string());
+    } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "camera:") {
+      text.camera = parse_camera_comment(std::vector<std::string>(t.begin() + 3, t.end()));
+      if (!text.camera)
+        warnings.push_back(InputError::format(path, number, "camera comment not understood, ignored; write '# aarad "
+                                                            "camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS'"));
+    }
+  }
+  return text;
+}
+
+// A material as the MTL text states it, with the lines of its statements.
+struct MtlEntry {
+  std::string file;
+  int line = 0;  // of `newmtl`
+  std::optional<Rgb> kd;
+  int kd_line = 0;
+  std::optional<Rgb> ke;
+  int ke_line = 0;
+};
+
+Rgb parse_colour(const std::string& path, int line, const std::vector<std::string>& t) {
+  // "Kd r g b" or "Kd r" (grey), as the MTL format allows.
+  std::vector<double> values;
+  for (std::size_t i = 1; i < t.size() && values.size() < 3; ++i) {
+    const auto v = parse_number(t[i]);
+    if (!v) throw InputError(path, line, "'" + t[0] + "' needs one or three numbers, got '" + t[i] + "'; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
+    values.push_back(*v);
+  }
+  if (values.size() == 1) return Rgb(values[0]);
+  if (values.size() == 3) return Rgb(values[0], values[1], values[2]);
+  throw InputError(path, line, "'" + t[0] + "' needs one or three numbers; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
+}
+
+void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& entries) {
+  std::ifstream in(path);
+  std::string line;
+  int number = 0;
+  MtlEntry* current = nullptr;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::vector<std::string> t = split_tokens(line);
+    if (t.empty()) continue;
+    if (t[0] == "newmtl") {
+      const std::string name = t.size() > 1 ? t[1] : std::string();
+      // The first definition of a name wins, as in tinyobjloader's material map.
+      const auto [it, inserted] = entries.try_emplace(name);
+      current = inserted ? &it->second : nullptr;
+      if (current) {
+        current->file = path;
+        current->line = number;
+      }
+    } else if (current && t[0] == "Kd") {
+      current->kd = parse_colour(path, number, t);
+      current->kd_line = number;
+    } else if (current && t[0] == "Ke") {
+      current->ke = parse_colour(path, number, t);
+      current->ke_line = number;
+    }
+  }
+}
+
+Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* entry, const std::string& obj_path,
+                          std::vector<std::string>& warnings) {
+  Material m;
+  m.name = parsed.name;
+  const std::string file = entry ? entry->file : obj_path;
+  if (entry && entry->kd) {
+    m.reflectance = *entry->kd;
+  } else {
+    m.reflectance = Rgb(0.5);
+    warnings.push_back(InputError::format(file, entry ? entry->line : 0,
+                                          "material '" + m.name + "' has no Kd; using reflectance 0.5 grey. Add 'Kd r g b' "
+                                          "with values in [0, 1)"));
+  }
+  if (entry && entry->ke) m.emission = *entry->ke;
+  const int kd_line = entry ? entry->kd_line : 0;
+  const int ke_line = entry ? entry->ke_line : 0;
+  for (int c = 0; c < 3; ++c) {
+    if (!(m.reflectance[c] >= 0.0 && m.reflectance[c] < 1.0))
+      throw InputError(file, kd_line,
+                       "material '" + m.name + "': Kd " + rgb_text(m.reflectance) +
+                           " is outside [0, 1): the solution would not converge. Kd is the reflectance per channel; "
+                           "use values from 0 up to below 1 (e.g. 0.8)");
+    if (!(m.emission[c] >= 0.0) || !std::isfinite(m.emission[c]))
+      throw InputError(file, ke_line,
+                       "material '" + m.name + "': Ke " + rgb_text(m.emission) +
+                           " must be finite and >= 0 per channel. Ke is the emitted radiosity; use 0 for a surface "
+                           "that does not emit");
+  }
+  return m;
+}
+
+// Ear clipping of a simple polygon given counter-clockwise in 2D. Appends index triples (counter-clockwise)
+// to `triangles`. Vertices where the boundary goes straight on are clipped like any other ear; the
+// resulting zero-area triangles are dropped by the caller.
+void ear_clip(const std::vector<Vec2>& p, std::vector<std::array<std::size_t, 3>>& triangles) {
+  std::vector<std::size_t> remaining(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) remaining[i] = i;
+  while (remaining.size() > 3) {
+    const std::size_t n = remaining.size();
+    std::optional<std::size_t> ear;
+    for (std::size_t k = 0; k < n && !ear; ++k) {
+      const std::size_t a = remaining[(k + n - 1) % n], b = remaining[k], c = remaining[(k + 1) % n];
+      if (orientation(p[a], p[b], p[c]) != Sign::kPositive) continue;
+      bool empty = true;
+      for (const std::size_t q : remaining) {
+        if (q == a || q == b || q == c || p[q] == p[a] || p[q] == p[b] || p[q] == p[c]) continue;
+        if (orientation(p[a], p[b], p[q]) != Sign::kNegative && orientation(p[b], p[c], p[q]) != Sign::kNegative &&
+            orientation(p[c], p[a], p[q]) != Sign::kNegative) {
+          empty = false;
+          break;
+        }
+      }
+      if (empty) ear = k;
+    }
+    // A simple polygon always has an ear (Meisters' two-ears theorem); only straight runs remain otherwise.
+    const std::size_t k = ear.value_or(0);
+    triangles.push_back({remaining[(k + n - 1) % n], remaining[k], remaining[(k + 1) % n]});
+    remaining.erase(remaining.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  triangles.push_back({remaining[0], remaining[1], remaining[2]});
+}
+
+// Checks one face and returns the polygons to add: none (skipped), the face itself, or its triangles.
+std::vector<std::vector<Vec3>> checked_face(std::vector<Vec3> v, const std::string& path, int line,
+                                            std::vector<std::string>& warnings) {
+  // Drop repeated consecutive vertices (cyclically).
+  std::vector<Vec3> distinct;
+  for (const Vec3& p : v)
+    if (distinct.empty() || p != distinct.back()) distinct.push_back(p);
+  while (distinct.size() > 1 && distinct.front() == distinct.back()) distinct.pop_back();
+  if (distinct.size() < 3) {
+    warnings.push_back(InputError::format(path, line, "face with fewer than three distinct vertices skipped; fix its "
+                                                      "vertex indices or remove it"));
+    return {};
+  }
+  v = std::move(distinct);
+
+  Vec3 lo = v[0], hi = v[0];
+  for (const Vec3& p : v) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const double size = glm::length(hi - lo);
+
+  // A reference plane that exists even when the Newell area vanishes (a symmetric bow-tie): through the
+  // vertex farthest from v0 and the vertex farthest from that line.
+  std::size_t far = 0;
+  for (std::size_t i = 1; i < v.size(); ++i)
+    if (glm::length(v[i] - v[0]) > glm::length(v[far] - v[0])) far = i;
+  Vec3 widest(0.0);
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const Vec3 c = glm::cross(v[far] - v[0], v[i] - v[0]);
+    if (glm::length(c) > glm::length(widest)) widest = c;
+  }
+  if (glm::length(widest) <= kZeroArea * size * size) {
+    warnings.push_back(InputError::format(path, line, "face of zero area (all its vertices on one line) skipped; "
+                                                      "remove it or fix its vertices"));
+    return {};
+  }
+  const Vec3 newell = vector_area(v);
+  const bool newell_zero = 2.0 * glm::length(newell) <= kZeroArea * size * size;
+  const Vec3 n = newell_zero ? glm::normalize(widest) : glm::normalize(newell);
+
+  std::vector<Vec2> flat(v.size());
+  project_to_2d(v, n, flat);
+  if (!is_simple(flat))
+    throw InputError(path, line, "face intersects itself (two of its edges cross or touch); list its vertices in "
+                                 "order around its boundary, or split it into simple polygons");
+  if (newell_zero) {
+    warnings.push_back(InputError::format(path, line, "face of zero area skipped; remove it or fix its vertices"));
+    return {};
+  }
+
+  Vec3 mean(0.0);
+  for (const Vec3& p : v) mean += p;
+  mean /= static_cast<double>(v.size());
+  double deviation = 0.0;
+  for (const Vec3& p : v) deviation = std::max(deviation, std::abs(glm::dot(n, p - mean)));
+  if (deviation <= kPlanarity * size) return {v};
+
+  // Not planar: ear-clip its projection (counter-clockwise, since n is the Newell normal).
+  std::vector<std::array<std::size_t, 3>> triangles;
+  ear_clip(flat, triangles);
+  std::vector<std::vector<Vec3>> out;
+  for (const auto& t : triangles) {
+    std::vector<Vec3> tri{v[t[0]], v[t[1]], v[t[2]]};
+    if (2.0 * area(tri) > kZeroArea * size * size) out.push_back(std::move(tri));
+  }
+  warnings.push_back(InputError::format(
+      path, line, "face is not planar (a vertex lies " + number_text(deviation) + " from its plane, more than " +
+                      number_text(kPlanarity) + " of its size); split into " + std::to_string(out.size()) +
+                      " triangles. Make the face planar or split it yourself to silence this"));
+  return out;
+}
+
+}  // namespace
+
+Scene import_obj(const std::string& obj_path) {
+  std::error_code ec;
+  if (!fs::exists(obj_path, ec))
+    throw InputError(obj_path, 0, "no such file; check the path (built-in scenes are named without a path: cornell, "
+                                  "office, furnace)");
+  if (!fs::is_regular_file(obj_path, ec)) throw InputError(obj_path, 0, "not a regular file; give the path of an OBJ file");
+  std::ifstream in(obj_path);
+  if (!in) throw InputError(obj_path, 0, std::string("cannot read the file (") + std::strerror(errno) + "); check its permissions");
+
+  Scene scene;
+  scene.name = obj_path;
+  std::vector<std::string>& warnings = scene.warnings;
+  const ObjText text = read_obj_text(obj_path, in, warnings);
+
+  // The MTL libraries, read the same way tinyobjloader finds them: relative to the OBJ's folder.
+  const fs::path folder = fs::path(obj_path).parent_path();
+  std::map<std::string, MtlEntry> mtl_entries;
+  for (const auto& [line, file] : text.material_libraries) {
+    const fs::path mtl = folder / file;
+    if (fs::is_regular_file(mtl, ec) && std::ifstream(mtl)) {
+      read_mtl_text(mtl.string(), mtl_entries);
+    } else {
+      warnings.push_back(InputError::format(obj_path, line, "material library '" + mtl.string() +
+                                                                "' not found; using the default material (reflectance "
+                                                                "0.5 grey, no emission). Put the MTL file there or fix "
+                                                                "the mtllib line"));
+    }
+  }
+  for (const auto& [line, name] : text.material_uses)
+    if (!mtl_entries.contains(name))
+      warnings.push_back(InputError::format(obj_path, line, "material '" + name + "' is not defined in any MTL file; "
+                                                            "using the default material (reflectance 0.5 grey, no "
+                                                            "emission). Define it with newmtl or fix the usemtl line"));
+
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> parsed_materials;
+  std::string tiny_warnings, tiny_errors;
+  const std::string base = folder.empty() ? std::string("./") : folder.string() + "/";
+  const bool ok = tinyobj::LoadObj(&attrib, &shapes, &parsed_materials, &tiny_warnings, &tiny_errors,
+                                   obj_path.c_str(), base.c_str(), /*triangulate=*/false);
+  if (!ok) throw InputError(obj_path, 0, "cannot parse the OBJ file: " + trim(tiny_errors));
+
+  // Materials, checked against the MTL text (which knows the lines).
+  std::vector<std::uint32_t> material_index(parsed_materials.size());
+  for (std::size_t i = 0; i < parsed_materials.size(); ++i) {
+    const auto found = mtl_entries.find(parsed_materials[i].name);
+    const MtlEntry* entry = found != mtl_entries.end() ? &found->second : nullptr;
+    material_index[i] = scene.add_material(checked_material(parsed_materials[i], entry, obj_path, warnings));
+  }
+  std::optional<std::uint32_t> default_material;
+
+  // Faces in file order; the k-th face is on the k-th `f` line with three or more vertex references.
+  std::size_t face_count = 0;
+  for (const auto& shape : shapes) face_count += shape.mesh.num_face_vertices.size();
+  const bool lines_known = face_count == text.face_lines.size();
+  const std::size_t vertex_count = attrib.vertices.size() / 3;
+  const bool positions_known = text.positions.size() == vertex_count;
+  const std::string stem = fs::path(obj_path).stem().string();
+
+  std::size_t face_number = 0;
+  bool unassigned_faces = false;
+  for (const auto& shape : shapes) {
+    std::string group_name = trim(shape.name);
+    if (group_name.empty()) group_name = stem.empty() ? std::string("default") : stem;
+    std::optional<std::uint32_t> group;
+    std::size_t offset = 0;
+    for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face_number) {
+      const int line = lines_known ? text.face_lines[face_number] : 0;
+      const std::size_t count = shape.mesh.num_face_vertices[f];
+      std::vector<Vec3> vertices;
+      for (std::size_t k = 0; k < count; ++k) {
+        const int index = shape.mesh.indices[offset + k].vertex_index;
+        if (index < 0 || static_cast<std::size_t>(index) >= vertex_count)
+          throw InputError(obj_path, line, "vertex index out of range (the file defines " + std::to_string(vertex_count) +
+                                               " vertices); fix the face's vertex references");
+        const auto i = static_cast<std::size_t>(index);
+        vertices.push_back(positions_known ? text.positions[i]
+                                           : Vec3(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]));
+      }
+      offset += count;
+
+      const auto polygons = checked_face(std::move(vertices), obj_path, line, warnings);
+      if (polygons.empty()) continue;
+      const int parsed_material = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
+      std::uint32_t material;
+      if (parsed_material >= 0 && static_cast<std::size_t>(parsed_material) < material_index.size()) {
+        material = material_index[static_cast<std::size_t>(parsed_material)];
+      } else {
+        if (!default_material) default_material = scene.add_material(Material{"default", Rgb(0.5), Rgb(0.0)});
+        material = *default_material;
+        unassigned_faces = true;
+      }
+      if (!group) group = scene.add_group(group_name);
+      for (const auto& polygon : polygons) scene.add_face(*group, material, polygon, line);
+    }
+  }
+  if (unassigned_faces && text.material_uses.empty() && text.material_libraries.empty())
+    warnings.push_back(InputError::format(obj_path, 0, "faces without a material use the default (reflectance 0.5 "
+                                                       "grey, no emission); add an MTL file with mtllib and usemtl"));
+
+  if (scene.faces.empty())
+    throw InputError(obj_path, 0, "no usable faces; the file needs at least one polygon ('f' line)");
+  scene.camera = text.camera;
+  scene.build_surfaces();
+  bool emits = false;
+  for (const Face& face : scene.faces) emits |= scene.materials[face.material].emits();
+  if (!emits)
+    warnings.push_back(InputError::format(obj_path, 0, "no face emits light, so the solution will be black; give a "
+                                                       "material a positive Ke"));
+  scene.validate();
+  return scene;
+}
+
+}  // namespace aarad

@@ -1,0 +1,39 @@
+// OBJ/MTL import into the scene model, following the scene contract of ../shared/design.md:
+//   - each OBJ face is a polygon whose vertices run counter-clockwise seen from its lit side;
+//   - a face belongs to the group named by the nearest preceding `o` or `g` (faces before any belong to a
+//     group named after the file's stem);
+//   - `Kd` is the reflectance rho per channel, in [0, 1); `Ke` the emitted radiosity, >= 0.
+// tinyobjloader parses the structure (groups, faces, materials); the importer reads the text once more
+// for what tinyobjloader does not keep: line numbers of vertices, faces and material statements, and the
+// coordinates themselves with strtod (correctly rounded, and NaN and infinity recognised).
+//
+// Bad input and what happens (every message names the file and, where there is one, the line):
+//   - missing or unreadable OBJ: InputError;
+//   - missing MTL, or a `usemtl` of an undefined material: warning, the default material (rho 0.5 grey, no
+//     emission);
+//   - a NaN or infinite coordinate, a vertex index out of range: InputError with the line;
+//   - a self-intersecting face (its projection to its plane is not simple): InputError with the line;
+//   - Kd outside [0, 1) (the solution would not converge), negative or non-finite Ke: InputError with
+//     the MTL file and line;
+//   - a face with fewer than three distinct vertices, or of zero area: skipped with a warning;
+//   - a non-planar face (a vertex farther than 1e-6 of the face's diagonal from its Newell plane): split
+//     into triangles by ear clipping, with a warning.
+// Warnings are collected in Scene::warnings.
+//
+// An optional comment line restores a camera (write_obj in core/obj_export.h writes it; other programs
+// ignore it):
+//   # aarad camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS
+#pragma once
+
+#include "core/scene.h"
+
+#include <string>
+
+namespace aarad {
+
+// Reads `obj_path` and the MTL libraries it names (relative to the OBJ's folder) into a scene whose
+// physical surfaces are built and which passed Scene::validate(). Scene::name is `obj_path`.
+// Throws aarad::InputError on bad input as listed above.
+Scene import_obj(const std::string& obj_path);
+
+}  // namespace aarad

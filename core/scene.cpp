@@ -1,0 +1,157 @@
+// The scene model: faces, groups and materials, and the grouping of faces into physical surfaces.
+// A physical surface is what the paper's identical-z exception needs (Chandran et al., section 3.2.1):
+// pieces of one surface never occlude each other. Here it is the faces of one group that share one plane,
+// one facing direction and one material (../shared/design.md, "Scene files").
+#include "core/scene.h"
+
+#include "core/error.h"
+#include "core/polygon.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace aarad {
+namespace {
+
+// Planes of two faces agree when their unit normals differ by less than about 1.4e-5 radians and every
+// vertex of the second lies within kPlaneDistance x the scene diagonal of the first face's plane.
+constexpr double kNormalDotTolerance = 1e-10;
+constexpr double kPlaneDistance = 1e-6;
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
+std::uint32_t Scene::add_group(const std::string& group_name) {
+  if (const auto found = find_group(group_name)) return *found;
+  groups.push_back(Group{group_name, {}, {}});
+  return static_cast<std::uint32_t>(groups.size() - 1);
+}
+
+std::uint32_t Scene::add_material(const Material& material) {
+  materials.push_back(material);
+  return static_cast<std::uint32_t>(materials.size() - 1);
+}
+
+void Scene::add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line) {
+  Face face;
+  face.vertices = std::move(vertices);
+  face.group = group;
+  face.material = material;
+  face.source_line = source_line;
+  faces.push_back(std::move(face));
+  groups[group].faces.push_back(static_cast<std::uint32_t>(faces.size() - 1));
+}
+
+void Scene::build_surfaces() {
+  surfaces.clear();
+  for (Group& g : groups) g.surfaces.clear();
+  const double tolerance = kPlaneDistance * diagonal();
+
+  for (std::uint32_t gi = 0; gi < groups.size(); ++gi) {
+    Group& group = groups[gi];
+    for (const std::uint32_t fi : group.faces) {
+      Face& face = faces[fi];
+      const Plane plane = plane_of(face.vertices);
+      std::optional<std::uint32_t> match;
+      for (const std::uint32_t si : group.surfaces) {
+        const Surface& s = surfaces[si];
+        if (s.material != face.material) continue;
+        if (glm::dot(s.plane.normal, plane.normal) < 1.0 - kNormalDotTolerance) continue;
+        const bool in_plane = std::all_of(face.vertices.begin(), face.vertices.end(), [&](const Vec3& v) {
+          return std::abs(s.plane.signed_distance(v)) <= tolerance;
+        });
+        if (in_plane) {
+          match = si;
+          break;
+        }
+      }
+      if (!match) {
+        Surface s;
+        s.group = gi;
+        s.material = face.material;
+        s.plane = plane;
+        surfaces.push_back(s);
+        match = static_cast<std::uint32_t>(surfaces.size() - 1);
+        group.surfaces.push_back(*match);
+      }
+      Surface& s = surfaces[*match];
+      s.faces.push_back(fi);
+      s.area += area(face.vertices);
+      face.surface = *match;
+    }
+  }
+}
+
+void Scene::validate() const {
+  const std::string where = name.empty() ? std::string("scene") : name;
+  if (faces.empty()) throw InputError(where, 0, "the scene has no faces; add at least one polygon");
+  for (const Material& m : materials) {
+    for (int c = 0; c < 3; ++c) {
+      if (!(m.reflectance[c] >= 0.0 && m.reflectance[c] < 1.0))
+        throw InputError(where, 0, "material '" + m.name + "': reflectance must lie in [0, 1) per channel, "
+                                   "otherwise the solution would not converge");
+      if (!(m.emission[c] >= 0.0) || !std::isfinite(m.emission[c]))
+        throw InputError(where, 0, "material '" + m.name + "': emission must be finite and >= 0 per channel");
+    }
+  }
+  std::size_t surface_faces = 0;
+  for (const Surface& s : surfaces) surface_faces += s.faces.size();
+  if (surface_faces != faces.size())
+    throw Error(where + ": physical surfaces are not built; call Scene::build_surfaces() after the last add_face");
+  for (const Face& f : faces) {
+    if (f.vertices.size() < 3) throw InputError(where, f.source_line, "a face has fewer than three vertices");
+    for (const Vec3& v : f.vertices)
+      if (!finite(v)) throw InputError(where, f.source_line, "a face has a vertex that is not finite");
+    if (f.material >= materials.size() || f.group >= groups.size() || f.surface >= surfaces.size())
+      throw Error(where + ": a face refers to a material, group or surface that does not exist");
+  }
+}
+
+Vec3 Scene::bounds_min() const {
+  if (faces.empty()) return Vec3(0.0);
+  Vec3 lo(std::numeric_limits<double>::infinity());
+  for (const Face& f : faces)
+    for (const Vec3& v : f.vertices) lo = glm::min(lo, v);
+  return lo;
+}
+
+Vec3 Scene::bounds_max() const {
+  if (faces.empty()) return Vec3(0.0);
+  Vec3 hi(-std::numeric_limits<double>::infinity());
+  for (const Face& f : faces)
+    for (const Vec3& v : f.vertices) hi = glm::max(hi, v);
+  return hi;
+}
+
+double Scene::diagonal() const { return glm::length(bounds_max() - bounds_min()); }
+
+double Scene::total_area() const {
+  double sum = 0.0;
+  for (const Face& f : faces) sum += area(f.vertices);
+  return sum;
+}
+
+std::optional<std::uint32_t> Scene::find_group(const std::string& group_name) const {
+  for (std::uint32_t i = 0; i < groups.size(); ++i)
+    if (groups[i].name == group_name) return i;
+  return std::nullopt;
+}
+
+Camera Scene::fitted_camera(double aspect) const {
+  // From outside the bounds, on the -z side and a little above, looking along +z and slightly down (the
+  // Cornell box's convention), far enough that the bounding sphere fits both fields of view.
+  Camera camera;
+  const Vec3 centre = 0.5 * (bounds_min() + bounds_max());
+  const double radius = std::max(0.5 * diagonal(), 1e-9);
+  camera.forward = glm::normalize(Vec3(0.0, -0.2, 1.0));
+  camera.up = glm::normalize(Vec3(0.0, 1.0, 0.0) - camera.forward.y * camera.forward);
+  const double half_vertical = 0.5 * camera.vertical_fov;
+  const double half_horizontal = std::atan(std::max(aspect, 1e-6) * std::tan(half_vertical));
+  const double half = std::min(half_vertical, half_horizontal);
+  camera.eye = centre - camera.forward * (radius / std::sin(half));
+  return camera;
+}
+
+}  // namespace aarad
