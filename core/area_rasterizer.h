@@ -1,15 +1,23 @@
 // Exact area scan conversion of polygons: the algorithm of Figure 4 of Chandran, Kiran, Phani and Rai,
-// "Anti-aliased hemicubes for radiosity", section 2.1.
+// "Anti-aliased hemicubes for radiosity", section 2.1 (edge traversal into an area array A and a carry
+// array C, then a prefix sum of the carries down each column). docs/area-rasterizer.md explains it.
 //
 // Coordinates: pixel (x, y) of a width x height viewport covers [x, x+1) x [y, y+1); y grows upwards.
 // Coverage is the fraction of the pixel's area inside the polygon, in [0, 1].
 //
-// (The implementation contract; see area_rasterizer.cpp.)
+// Implementation contract (area_rasterizer.cpp):
+// - Every edge adds, to each pixel of its column, the signed area between the edge and the bottom of the
+//   viewport; parts left or right of the viewport add nothing, parts above it add the full column height,
+//   parts below it add zero. Clipping is therefore exact and needs no polygon clipper.
+// - An edge is traversed from its endpoint of smaller x to the other whatever its direction in the
+//   polygon, with the sign carried separately, so an edge shared by two polygons of the same winding
+//   cancels bit for bit: pieces of a polygon add up to the whole with no cracks and no double counting.
+// - No allocation per call: scratch buffers sized to the viewport are allocated by the constructor and
+//   only the touched cells are read and cleared again, column by column.
 #pragma once
 
 #include "core/math.h"
 
-#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -22,25 +30,89 @@ struct RasterResult {
   Winding winding = Winding::kDegenerate;
 };
 
-// Reusable scratch state; no allocation per polygon once warmed up.
+// Reusable scratch state; no allocation per polygon once constructed. Not thread-safe: use one
+// rasterizer per thread.
 class AreaRasterizer {
  public:
+  // Coverage below this fraction of a pixel is rounding noise of the carry sums (about 1e-16 per edge
+  // piece) and is reported as no coverage; genuine coverage that small changes no sum by more than it.
+  static constexpr double kCoverageFloor = 1e-13;
+
+  // Throws aarad::Error unless 1 <= width, height <= 1 << 15.
   AreaRasterizer(int width, int height);
 
   int width() const { return width_; }
   int height() const { return height_; }
 
-  // Scan-converts a simple polygon of either winding, clipped exactly to the viewport, and calls
-  // visit(x, y, coverage) once for every pixel with coverage > 0, column by column.
+  // Scan-converts a simple polygon (vertices in pixel units, either winding, first vertex not repeated),
+  // clipped exactly to the viewport, and calls visit(x, y, coverage) once for every pixel with
+  // coverage > kCoverageFloor: column by column (x increasing), inside a column y decreasing, over the
+  // clipped bounding box only. Coverage is clamped to at most 1. A polygon with fewer than three
+  // vertices, with all vertices collinear, or with a non-finite coordinate visits nothing and returns
+  // Winding::kDegenerate. The winding is decided exactly (sign of the shoelace sum in exact arithmetic).
   template <class Visit>
   RasterResult rasterize(std::span<const Vec2> polygon, Visit&& visit);
 
   // Adds the coverage of `polygon` to `image` (width * height values, row y at offset y * width).
+  // Throws aarad::Error when image.size() != width * height.
   RasterResult rasterize_into(std::span<const Vec2> polygon, std::span<double> image);
 
  private:
+  // One pixel's accumulators of Figure 4: A (signed area under the edges inside the pixel, measured
+  // from the pixel's bottom) and C (signed projected width of the edge pieces inside the pixel, which
+  // covers every pixel below it in the column: the carry).
+  struct Cell {
+    double area = 0.0;
+    double carry = 0.0;
+  };
+
+  // Phase 1 (edge traversal): fills cells_ and the touched row range of every column in
+  // [column_begin_, column_end_). Returns the winding; nothing is touched for a degenerate polygon.
+  RasterResult traverse_edges(std::span<const Vec2> polygon);
+  void add_edge(Vec2 p, Vec2 q, double sign);
+  void add_clipped_piece(double x0, double y0, double x1, double y1, double slope, double inverse_slope,
+                         double sign);
+  void add_top_carry(double x0, double x1, double sign);
+  void mark_bottom(double x0, double x1);
+
+  Cell* column(int x) { return cells_.data() + static_cast<std::ptrdiff_t>(x) * stride_; }
+
   int width_, height_;
-  // Filled by the implementation.
+  int stride_;                      // height_ + 1 cells per column: row height_ holds the carry from above
+  std::vector<Cell> cells_;         // column-major, all zero between calls
+  std::vector<int> row_low_;        // per column: lowest touched row, height_ + 1 when untouched
+  std::vector<int> row_high_;       // per column: highest touched row, -1 when untouched
+  int column_begin_ = 0, column_end_ = 0;
 };
+
+// Phase 2 (carry adjustment), fused with the visit: for each touched column, run down from its highest
+// touched row adding the carries of the rows above (the prefix sum of Figure 4), report the pixel and
+// clear its cell for the next polygon.
+template <class Visit>
+RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
+  const RasterResult result = traverse_edges(polygon);
+  for (int x = column_begin_; x < column_end_; ++x) {
+    const int low = row_low_[x];
+    int y = row_high_[x];
+    row_low_[x] = height_ + 1;
+    row_high_[x] = -1;
+    if (y < low) continue;
+    Cell* cells = column(x);
+    double carry = 0.0;
+    if (y == height_) {  // the part of the polygon above the viewport covers the column below it
+      carry = cells[y].carry;
+      cells[y] = Cell{};
+      --y;
+    }
+    for (; y >= low; --y) {
+      const double coverage = cells[y].area + carry;
+      carry += cells[y].carry;
+      cells[y] = Cell{};
+      if (coverage > kCoverageFloor) visit(x, y, coverage < 1.0 ? coverage : 1.0);
+    }
+  }
+  column_begin_ = column_end_ = 0;
+  return result;
+}
 
 }  // namespace aarad
