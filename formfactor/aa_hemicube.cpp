@@ -1,0 +1,90 @@
+// The anti-aliased hemicube: Chandran, Kiran, Phani and Rai, section 3.2 (see aa_hemicube.h).
+#include "formfactor/aa_hemicube.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+
+namespace aarad::formfactor {
+
+AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {}
+
+std::size_t AaHemicubeBackend::last_entries() const {
+  std::size_t sum = 0;
+  for (std::size_t n : face_entries_) sum += n;
+  return sum;
+}
+
+void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receivers, std::size_t max_vertices,
+                                   FaceBuffers& b, std::vector<double>& sums) {
+  const int width = geometry_.width(face), height = geometry_.height(face);
+  const double half = 0.5 * geometry_.resolution();
+  std::unique_ptr<AreaRasterizer>& raster = face == HemicubeFace::kTop ? b.top : b.side;
+  if (!raster) raster = std::make_unique<AreaRasterizer>(width, height);
+  b.arena.reset(geometry_.pixels(face));
+  b.scratch.resize(clipped_capacity(max_vertices));
+  b.clipped.resize(clipped_capacity(max_vertices));
+  b.projected.resize(clipped_capacity(max_vertices));
+  const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
+  CoverageArena& arena = b.arena;
+
+  for (std::size_t i = 0; i < receivers.size(); ++i) {
+    if ((prepared_.face_mask(i) & bit) == 0) continue;
+    const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
+    if (m == 0) continue;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
+    bool degenerate = false;
+    for (std::size_t k = 0; k < m; ++k) {
+      const Vec3& f = b.clipped[k];
+      if (!(f.x > 0.0)) {
+        degenerate = true;
+        break;
+      }
+      const Vec2 p = project_to_pixels(face, f, half);
+      b.projected[k] = p;
+      x0 = std::min(x0, p.x);
+      x1 = std::max(x1, p.x);
+      y0 = std::min(y0, p.y);
+      y1 = std::max(y1, p.y);
+      lo = std::min(lo, 1.0 / f.x);
+      hi = std::max(hi, 1.0 / f.x);
+    }
+    if (degenerate) continue;
+    const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
+    const auto receiver = static_cast<std::uint32_t>(i);
+    const std::uint32_t surface = receivers.surface(i);
+    raster->rasterize(std::span<const Vec2>(b.projected.data(), m), [&](int x, int y, double coverage) {
+      const double px = std::clamp(x + 0.5, x0, x1), py = std::clamp(y + 0.5, y0, y1);
+      double z = depth.at(px, py);
+      if (!(z >= lo)) z = lo;
+      if (z > hi) z = hi;
+      arena.insert(static_cast<std::size_t>(y) * width + x, CoverageEntry{1.0 / z, coverage, receiver, surface});
+    });
+  }
+  face_entries_[static_cast<std::size_t>(face)] = arena.nodes_used();
+  const std::span<const double> weight = geometry_.coverage_weight(face);
+  const std::size_t pixels = geometry_.pixels(face);
+  for (std::size_t p = 0; p < pixels; ++p) {
+    if (arena.empty(p)) continue;
+    const double w = weight[p];
+    arena.resolve(p, [&](std::uint32_t receiver, double visible) { sums[receiver] += visible * w; });
+  }
+  (void)height;
+}
+
+void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
+                                std::span<const std::uint32_t> subset, std::span<double> out) {
+  prepared_.prepare(shooter, receivers);
+  std::size_t max_vertices = 3;
+  for (std::size_t i = 0; i < receivers.size(); ++i) max_vertices = std::max(max_vertices, receivers.polygon(i).size());
+  for (auto& sums : face_sums_) sums.assign(receivers.size(), 0.0);
+  tbb::parallel_for(0, kHemicubeFaces, [&](int f) {
+    shoot_face(static_cast<HemicubeFace>(f), receivers, max_vertices, buffers_.local(),
+               face_sums_[static_cast<std::size_t>(f)]);
+  });
+  combine_face_sums(face_sums_, subset, out);
+}
+
+}  // namespace aarad::formfactor

@@ -1,0 +1,63 @@
+// The anti-aliased hemicube: Chandran, Kiran, Phani and Rai, "Anti-aliased hemicubes for radiosity",
+// section 3.2. Every receiver facing the shooter is clipped to each face's frustum (hemicube_geometry.h),
+// projected, and scan-converted with the exact area rasterizer of the paper's Figure 4 (core/area_rasterizer.h);
+// every pixel keeps a depth-sorted list of (receiver, A, depth, surface) (coverage_list.h); walking each list
+// front to back, a receiver gets E_k = A_k (1 - f_{k-1}) of the pixel's delta form factor.
+//
+// The depth kept per receiver and pixel is the distance along the face axis at which the ray through one
+// point of the pixel meets the receiver's plane: the pixel centre moved into the receiver's clipped bounding
+// box, with the result clamped into the range of the clipped polygon's vertex depths. Why: 1 / depth is affine in
+// pixel coordinates, so it costs one multiply-add per entry (the rasterizer reports coverage, not where in the
+// pixel it lies); inside a receiver it is the exact depth at the pixel centre; at its border the plane is not
+// extrapolated beyond the receiver (a grazing plane evaluated at a centre it does not cover could land far
+// behind, or behind the shooter), so a receiver is never sorted outside its own depth range. Pieces of one
+// physical surface are grouped by surface id, not by comparing depths, so coplanar pieces never occlude each
+// other whatever rounding does to their planes.
+//
+// Parallel over the five faces (one arena and rasterizer per thread); the per-face partial sums are added in
+// face order, so the numbers do not depend on the number of threads.
+#pragma once
+
+#include "core/area_rasterizer.h"
+#include "formfactor/backend.h"
+#include "formfactor/coverage_list.h"
+#include "formfactor/hemicube_geometry.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+namespace aarad::formfactor {
+
+class AaHemicubeBackend final : public FormFactorBackend {
+ public:
+  explicit AaHemicubeBackend(int resolution);
+
+  std::string_view name() const override { return "aa-hemicube"; }
+  void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
+               std::span<double> out) override;
+
+  const HemicubeGeometry& geometry() const { return geometry_; }
+  // Entries inserted into the coverage lists by the last compute(), summed over faces (for benchmarks).
+  std::size_t last_entries() const;
+
+ private:
+  struct FaceBuffers {
+    std::unique_ptr<AreaRasterizer> top, side;
+    CoverageArena arena;
+    std::vector<Vec3> scratch, clipped;
+    std::vector<Vec2> projected;
+  };
+  void shoot_face(HemicubeFace face, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,
+                  std::vector<double>& sums);
+
+  HemicubeGeometry geometry_;
+  PreparedReceivers prepared_;
+  std::array<std::vector<double>, kHemicubeFaces> face_sums_;
+  std::array<std::size_t, kHemicubeFaces> face_entries_{};
+  tbb::enumerable_thread_specific<FaceBuffers> buffers_;
+};
+
+}  // namespace aarad::formfactor

@@ -1,0 +1,326 @@
+// Hemicube geometry: Cohen and Greenberg 1985 (faces, delta form factors), Chandran et al. section 3.2
+// (culling and clipping), Sutherland and Hodgman 1974 (clipping). See hemicube_geometry.h for the conventions.
+#include "formfactor/hemicube_geometry.h"
+
+#include "core/error.h"
+#include "core/predicates.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace aarad::formfactor {
+
+double top_corner_form_factor(double x, double y) {
+  // Howell B-3 with c = 1: (1/2pi) [x/sqrt(1+x^2) atan(y/sqrt(1+x^2)) + y/sqrt(1+y^2) atan(x/sqrt(1+y^2))].
+  const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
+  return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * kPi);
+}
+
+double side_corner_form_factor(double y, double z) {
+  const double s = std::sqrt(1.0 + z * z);
+  return (std::atan(y) - std::atan(y / s) / s) / (2.0 * kPi);
+}
+
+HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
+    : resolution_(resolution), rule_(rule), side_rows_((resolution + 1) / 2) {
+  check_resolution(resolution);
+  const int n = resolution_;
+  const double cell = 2.0 / n;
+  const bool odd = n % 2 != 0;
+  // Centre of the inside half of the half row, in pixel units: rows [N/2 - 1/2, N/2).
+  half_row_sample_y_ = odd ? 0.5 * n - 0.25 : side_rows_ - 0.5;
+  auto node = [n](int i) { return static_cast<double>(2 * i - n) / n; };  // -1 + 2 i / N
+  auto height_node = [n](int r) { return std::min(1.0, static_cast<double>(2 * r) / n); };
+
+  // Top face.
+  std::vector<double>& top = delta_[0];
+  top.assign(static_cast<std::size_t>(n) * n, 0.0);
+  if (rule_ == DeltaRule::kExactCell) {
+    std::vector<double> corner(static_cast<std::size_t>(n + 1) * (n + 1));
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) corner[static_cast<std::size_t>(j) * (n + 1) + i] = top_corner_form_factor(node(i), node(j));
+    for (int j = 0; j < n; ++j) {
+      const double* lo = &corner[static_cast<std::size_t>(j) * (n + 1)];
+      const double* hi = lo + (n + 1);
+      for (int i = 0; i < n; ++i) top[static_cast<std::size_t>(j) * n + i] = (hi[i + 1] - hi[i]) - (lo[i + 1] - lo[i]);
+    }
+  } else {
+    for (int j = 0; j < n; ++j) {
+      const double y = node(j) + 0.5 * cell;
+      for (int i = 0; i < n; ++i) {
+        const double x = node(i) + 0.5 * cell, r = x * x + y * y + 1.0;
+        top[static_cast<std::size_t>(j) * n + i] = cell * cell / (kPi * r * r);
+      }
+    }
+  }
+  weight_[0] = top;
+
+  // Side faces: identical tables (the four faces are congruent), row r = height above the base.
+  std::vector<double> side(static_cast<std::size_t>(n) * side_rows_, 0.0);
+  std::vector<double> fraction(static_cast<std::size_t>(side_rows_), 1.0);
+  if (odd) fraction.back() = 0.5;
+  if (rule_ == DeltaRule::kExactCell) {
+    std::vector<double> corner(static_cast<std::size_t>(n + 1) * (side_rows_ + 1));
+    for (int r = 0; r <= side_rows_; ++r)
+      for (int i = 0; i <= n; ++i)
+        corner[static_cast<std::size_t>(r) * (n + 1) + i] = side_corner_form_factor(node(i), height_node(r));
+    for (int r = 0; r < side_rows_; ++r) {
+      const double* lo = &corner[static_cast<std::size_t>(r) * (n + 1)];
+      const double* hi = lo + (n + 1);
+      for (int i = 0; i < n; ++i) side[static_cast<std::size_t>(r) * n + i] = (hi[i + 1] - hi[i]) - (lo[i + 1] - lo[i]);
+    }
+  } else {
+    for (int r = 0; r < side_rows_; ++r) {
+      const double z0 = height_node(r), z1 = height_node(r + 1), z = 0.5 * (z0 + z1), dz = z1 - z0;
+      for (int i = 0; i < n; ++i) {
+        const double y = node(i) + 0.5 * cell, q = y * y + z * z + 1.0;
+        side[static_cast<std::size_t>(r) * n + i] = z * cell * dz / (kPi * q * q);
+      }
+    }
+  }
+  std::vector<double> side_weight = side;
+  for (int r = 0; r < side_rows_; ++r)
+    for (int i = 0; i < n; ++i) side_weight[static_cast<std::size_t>(r) * n + i] /= fraction[static_cast<std::size_t>(r)];
+  for (int f = 1; f < kHemicubeFaces; ++f) {
+    delta_[static_cast<std::size_t>(f)] = side;
+    weight_[static_cast<std::size_t>(f)] = side_weight;
+  }
+}
+
+double HemicubeGeometry::face_total(HemicubeFace face) const {
+  double sum = 0.0;
+  for (double d : delta(face)) sum += d;
+  return sum;
+}
+
+double HemicubeGeometry::total() const {
+  double sum = 0.0;
+  for (int f = 0; f < kHemicubeFaces; ++f) sum += face_total(static_cast<HemicubeFace>(f));
+  return sum;
+}
+
+void combine_face_sums(const std::array<std::vector<double>, kHemicubeFaces>& face_sums,
+                       std::span<const std::uint32_t> subset, std::span<double> out) {
+  auto combine = [&](std::size_t i) {
+    double sum = 0.0;
+    for (const std::vector<double>& face : face_sums) sum += face[i];
+    out[i] = sum;
+  };
+  if (subset.empty()) {
+    for (std::size_t i = 0; i < out.size(); ++i) combine(i);
+  } else {
+    for (std::uint32_t i : subset) combine(i);
+  }
+}
+
+void check_resolution(int resolution) {
+  if (resolution < kMinResolution || resolution > kMaxResolution) {
+    throw Error("hemicube resolution " + std::to_string(resolution) + " is out of range: use a value from " +
+                std::to_string(kMinResolution) + " to " + std::to_string(kMaxResolution) +
+                " (pixels along the full top face)");
+  }
+}
+
+Vec3 to_local(const Shooter& shooter, const Vec3& p) {
+  const Vec3 d = p - shooter.centre;
+  double w = glm::dot(shooter.normal, d);
+  // Make the sign of w the exact side of p relative to the shooter's plane.
+  const Sign side = side_of_plane(shooter.centre, shooter.normal, p);
+  if (side == Sign::kZero) {
+    w = 0.0;
+  } else if (side == Sign::kPositive && !(w > 0.0)) {
+    w = std::numeric_limits<double>::min();
+  } else if (side == Sign::kNegative && !(w < 0.0)) {
+    w = -std::numeric_limits<double>::min();
+  }
+  return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
+}
+
+Vec3 to_face(HemicubeFace face, const Vec3& q) {
+  switch (face) {
+    case HemicubeFace::kTop: return {q.z, q.x, q.y};
+    case HemicubeFace::kPosU: return {q.x, q.y, q.z};
+    case HemicubeFace::kNegU: return {-q.x, q.y, q.z};
+    case HemicubeFace::kPosV: return {q.y, q.x, q.z};
+    case HemicubeFace::kNegV: return {-q.y, q.x, q.z};
+  }
+  return q;
+}
+
+Plane plane_to_local(const Shooter& shooter, const Plane& plane) {
+  const Vec3& n = plane.normal;
+  return Plane{{glm::dot(n, shooter.tangent), glm::dot(n, shooter.bitangent), glm::dot(n, shooter.normal)},
+               plane.signed_distance(shooter.centre)};
+}
+
+bool faces_point(const Plane& plane, const Vec3& centre) {
+  return sign_of_linear(plane.normal, plane.d, centre) == Sign::kPositive;
+}
+
+namespace {
+
+// Outcode bits of one face for a point in that face's coordinates. fl(a - l) < 0 exactly when a < l.
+inline std::uint32_t face_outcode(bool top, const Vec3& f) {
+  std::uint32_t code = 0;
+  if (f.x - f.y < 0.0) code |= 1u;
+  if (f.x + f.y < 0.0) code |= 2u;
+  if (f.x - f.z < 0.0) code |= 4u;
+  if ((top ? f.x + f.z : f.z) < 0.0) code |= 8u;
+  return code;
+}
+
+// Value of plane k of a face at a point in face coordinates; the face keeps value >= 0.
+inline double plane_value(bool top, int k, const Vec3& f) {
+  switch (k) {
+    case 0: return f.x - f.y;
+    case 1: return f.x + f.y;
+    case 2: return f.x - f.z;
+    default: return top ? f.x + f.z : f.z;
+  }
+}
+
+inline bool lexicographic_less(const Vec3& a, const Vec3& b) {
+  if (a.x != b.x) return a.x < b.x;
+  if (a.y != b.y) return a.y < b.y;
+  return a.z < b.z;
+}
+
+// The point where edge (p, q) crosses plane k (their values have strictly opposite signs), computed from the
+// endpoints in canonical order and snapped onto the plane.
+inline Vec3 crossing(bool top, int k, const Vec3& p, double vp, const Vec3& q, double vq) {
+  const bool swap = lexicographic_less(q, p);
+  const Vec3& a = swap ? q : p;
+  const Vec3& b = swap ? p : q;
+  const double va = swap ? vq : vp, vb = swap ? vp : vq;
+  const double t = va / (va - vb);
+  Vec3 x = a + t * (b - a);
+  switch (k) {
+    case 0: x.y = x.x; break;
+    case 1: x.y = -x.x; break;
+    case 2: x.z = x.x; break;
+    default: x.z = top ? -x.x : 0.0; break;
+  }
+  return x;
+}
+
+}  // namespace
+
+std::uint32_t frustum_outcode(const Vec3& local) {
+  std::uint32_t code = 0;
+  for (int f = 0; f < kHemicubeFaces; ++f) {
+    const auto face = static_cast<HemicubeFace>(f);
+    code |= face_outcode(face == HemicubeFace::kTop, to_face(face, local)) << (4 * f);
+  }
+  return code;
+}
+
+std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face, std::uint32_t outside_mask,
+                         std::span<Vec3> scratch, std::span<Vec3> out) {
+  const bool top = face == HemicubeFace::kTop;
+  const std::uint32_t planes = (outside_mask >> (4 * static_cast<int>(face))) & 0xFu;
+  // Count the passes so that the last one writes into `out`.
+  int passes = 0;
+  for (int k = 0; k < 4; ++k) passes += (planes >> k) & 1u;
+  Vec3* buffers[2] = {passes % 2 == 0 ? out.data() : scratch.data(), passes % 2 == 0 ? scratch.data() : out.data()};
+  std::size_t count = local_polygon.size();
+  for (std::size_t i = 0; i < count; ++i) buffers[0][i] = to_face(face, local_polygon[i]);
+  int current = 0;
+  for (int k = 0; k < 4 && count > 0; ++k) {
+    if (((planes >> k) & 1u) == 0) continue;
+    const Vec3* in = buffers[current];
+    Vec3* result = buffers[1 - current];
+    std::size_t written = 0;
+    Vec3 prev = in[count - 1];
+    double vprev = plane_value(top, k, prev);
+    for (std::size_t i = 0; i < count; ++i) {
+      const Vec3 cur = in[i];
+      const double vcur = plane_value(top, k, cur);
+      if (vcur >= 0.0) {
+        if (vprev < 0.0 && vcur > 0.0) result[written++] = crossing(top, k, prev, vprev, cur, vcur);
+        result[written++] = cur;
+      } else if (vprev > 0.0) {
+        result[written++] = crossing(top, k, prev, vprev, cur, vcur);
+      }
+      prev = cur;
+      vprev = vcur;
+    }
+    count = written < 3 ? 0 : written;
+    current = 1 - current;
+  }
+  return count;
+}
+
+InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, double half_resolution) {
+  // Ray through face point (l1 / a, l2 / a) = (X, Y) meets n . q + d = 0 at a = -d / (n_a + n_1 X + n_2 Y),
+  // with X = x / h - 1 and Y = y / h - 1 (top) or y / h (side), h = half_resolution.
+  const Vec3 n = to_face(face, local_plane.normal);
+  const double k = -1.0 / local_plane.d;
+  InverseDepth r;
+  r.alpha = k * n.y / half_resolution;
+  r.beta = k * n.z / half_resolution;
+  r.gamma = k * (n.x - n.y - (face == HemicubeFace::kTop ? n.z : 0.0));
+  return r;
+}
+
+void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
+  const std::size_t count = receivers.size();
+  offsets_ = receivers.offsets();
+  local_.resize(receivers.vertices().size());
+  outcode_.resize(receivers.vertices().size());
+  outside_.resize(count);
+  face_mask_.resize(count);
+  local_planes_.resize(count);
+
+  cull_back_faces(shooter.centre, receivers, patch_state_, front_);
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const std::span<const Vec3> polygon = receivers.polygon(i);
+      std::uint32_t all = ~0u, any = 0u;
+      for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
+        const Vec3 q = to_local(shooter, receivers.vertices()[v]);
+        local_[v] = q;
+        const std::uint32_t code = frustum_outcode(q);
+        outcode_[v] = code;
+        all &= code;
+        any |= code;
+      }
+      outside_[i] = any;
+      local_planes_[i] = plane_to_local(shooter, receivers.plane(i));
+      std::uint8_t mask = 0;
+      if (front_[i] != 0 && polygon.size() >= 3) {
+        for (int f = 0; f < kHemicubeFaces; ++f)
+          if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
+      }
+      face_mask_[i] = mask;
+    }
+  });
+
+}
+
+void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,
+                     std::vector<std::uint8_t>& front) {
+  const std::size_t count = receivers.size();
+  front.resize(count);
+  std::uint32_t max_patch = 0;
+  for (std::uint32_t p : receivers.patches()) max_patch = std::max(max_patch, p);
+  const bool per_patch = count > 0 && max_patch <= 16 * count + 1024;
+  patch_state.assign(per_patch ? static_cast<std::size_t>(max_patch) + 1 : 0, 0);  // 0 unknown, 1 front, 2 back
+  // Serially in receiver order: the first receiver of a patch decides, whatever the thread count.
+  for (std::size_t i = 0; i < count; ++i) {
+    if (per_patch) {
+      std::uint8_t& state = patch_state[receivers.patch(i)];
+      if (state == 0) state = faces_point(receivers.plane(i), centre) ? 1 : 2;
+      front[i] = state == 1 ? 1 : 0;
+    } else {
+      front[i] = faces_point(receivers.plane(i), centre) ? 1 : 0;
+    }
+  }
+}
+
+}  // namespace aarad::formfactor

@@ -1,0 +1,187 @@
+// Hemicube geometry shared by the classical and the anti-aliased hemicube: the shooter's frame, the five
+// faces and their pixel grids, the delta form-factor tables, back-face culling, and the clipping of receivers
+// to the space in front of the shooter and to each face's frustum.
+//
+// Sources: Cohen and Greenberg, "The hemi-cube", SIGGRAPH 1985 (faces, delta form factors); Chandran, Kiran,
+// Phani and Rai, "Anti-aliased hemicubes for radiosity", section 3.2 (back-face culling of the parent patch,
+// clipping onto the hemicube); Sutherland and Hodgman 1974 (reentrant polygon clipping).
+//
+// Coordinates. Local coordinates (u, v, w) = (tangent, bitangent, normal) . (p - centre). Every face has an
+// axis a (the coordinate along its outward direction) and two lateral coordinates (l1, l2):
+//   top  (w): a = w,  l1 = u, l2 = v      side +u: a = u,  l1 = v, l2 = w      side -u: a = -u, l1 = v, l2 = w
+//                                          side +v: a = v,  l1 = u, l2 = w      side -v: a = -v, l1 = u, l2 = w
+// The frustum of a face is { a >= |l1|, a >= l2, and l2 >= -a on the top / l2 >= 0 on a side }: all five
+// are bounded by planes through the shooter's centre, and they tile the half-space w >= 0.
+// Pixel coordinates of a face (y up, pixel (x, y) covers [x, x+1) x [y, y+1)):
+//   x = (l1 / a + 1) N / 2,   y = (l2 / a + 1) N / 2 on the top,   y = (l2 / a) N / 2 on a side.
+// The top face is N x N pixels, a side face N x ceil(N / 2). For odd N the side faces' last row (at the seam
+// with the top face) is a half row: only its lower half, [N/2 - 1/2, N/2), lies inside the face; its delta form
+// factor is the integral over that half, and the classical hemicube samples the centre of that half.
+//
+// Exactness. The world-to-local transform is computed once per vertex per shot in doubles, so a vertex shared
+// by several receivers gets one set of local coordinates. Every sidedness decision afterwards is exact on those
+// doubles: the sign of w is decided by side_of_plane (core/predicates.h), and the face planes a -+ l = 0 are
+// decided by the sign of the computed difference fl(a - l), which IEEE-754 rounding makes exactly the sign of
+// a - l (zero exactly when a == l). Intersection points are computed in doubles from the edge's endpoints in a
+// canonical (lexicographic) order, so two receivers that share an edge get bit-identical points, and the
+// coordinate the plane fixes is snapped onto it (l := a, l := -a or l2 := 0), so the projected cut lies exactly
+// on the face's border (pixel coordinate 0, N or N/2). Hence neighbours cover complementary areas: no gap, no
+// double count.
+#pragma once
+
+#include "core/math.h"
+#include "formfactor/backend.h"
+#include "formfactor/receiver_view.h"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace aarad::formfactor {
+
+enum class HemicubeFace : int { kTop = 0, kPosU = 1, kNegU = 2, kPosV = 3, kNegV = 4 };
+inline constexpr int kHemicubeFaces = 5;
+
+// Smallest and largest hemicube resolution accepted by the back ends.
+inline constexpr int kMinResolution = 2;
+inline constexpr int kMaxResolution = 8192;
+
+// Which integral of the cosine kernel a delta form factor holds.
+enum class DeltaRule {
+  kMidpoint,   // Cohen and Greenberg: the kernel at the cell centre times the cell area (references.md)
+  kExactCell,  // the exact form factor of the cell (closed form of its corners), which sums to 1
+};
+
+// Exact form factor from the origin (normal +w) to the rectangle [0, x] x [0, y] of the plane w = 1: Howell's
+// B-3 with c = 1, signed (odd in x and in y), so cells follow by inclusion-exclusion of their corners.
+double top_corner_form_factor(double x, double y);
+// Exact form factor from the origin (normal +w) to the rectangle {u = 1, 0 <= v <= y, 0 <= w <= z}, odd in y:
+//   (1 / 2 pi) [atan(y) - atan(y / sqrt(1 + z^2)) / sqrt(1 + z^2)]   (Baum et al. eq. 9 on that rectangle).
+double side_corner_form_factor(double y, double z);
+
+// The pixel grids and delta form-factor tables of a hemicube of resolution N.
+class HemicubeGeometry {
+ public:
+  explicit HemicubeGeometry(int resolution, DeltaRule rule = DeltaRule::kExactCell);
+
+  int resolution() const { return resolution_; }
+  DeltaRule rule() const { return rule_; }
+  int width(HemicubeFace) const { return resolution_; }
+  int height(HemicubeFace face) const { return face == HemicubeFace::kTop ? resolution_ : side_rows_; }
+  std::size_t pixels(HemicubeFace face) const {
+    return static_cast<std::size_t>(width(face)) * static_cast<std::size_t>(height(face));
+  }
+  // Delta form factor of every pixel of a face, row y at offset y * width: the form factor of the part of the
+  // pixel inside the face. The five tables sum to 1 (kExactCell) or to 1 + O(1 / N^2) (kMidpoint).
+  std::span<const double> delta(HemicubeFace face) const { return delta_[index(face)]; }
+  // Delta form factor per unit of pixel coverage: delta / (fraction of the pixel inside the face). Equal to
+  // delta except in the half row of a side face for odd N.
+  std::span<const double> coverage_weight(HemicubeFace face) const { return weight_[index(face)]; }
+  // y (pixel units) at which the classical hemicube samples row `row` of a face: row + 1/2, or the centre of
+  // the inside half for the half row.
+  double sample_y(HemicubeFace face, int row) const {
+    return face != HemicubeFace::kTop && row == side_rows_ - 1 ? half_row_sample_y_ : row + 0.5;
+  }
+  // Sum of the delta form factors of one face, and of all five.
+  double face_total(HemicubeFace face) const;
+  double total() const;
+
+ private:
+  static std::size_t index(HemicubeFace face) { return static_cast<std::size_t>(face); }
+  int resolution_;
+  DeltaRule rule_;
+  int side_rows_;
+  double half_row_sample_y_;
+  std::array<std::vector<double>, kHemicubeFaces> delta_;
+  std::array<std::vector<double>, kHemicubeFaces> weight_;
+};
+
+// Local coordinates (u, v, w) of p in the shooter's frame. The sign of w is made exactly the sign of
+// normal . (p - centre) (side_of_plane), and w is exactly 0 when p lies in the shooter's plane.
+Vec3 to_local(const Shooter& shooter, const Vec3& p);
+// Face coordinates (a, l1, l2) of a local point (see the table at the top of this file). Exact.
+Vec3 to_face(HemicubeFace face, const Vec3& local);
+// A receiver plane in local coordinates: normal rotated into the frame, d = signed distance of the shooter's
+// centre (positive when the centre is on the front side).
+Plane plane_to_local(const Shooter& shooter, const Plane& plane);
+
+// Back-face culling (paper, section 3.2): whether the front side of `plane` strictly contains `centre`,
+// decided exactly (sign_of_linear).
+bool faces_point(const Plane& plane, const Vec3& centre);
+// Back-face culling per parent patch: front[i] = 1 when the patch of receiver i faces `centre`, else 0. A patch
+// is decided once, on the plane of its first receiver (receivers are coplanar with their patch), so all its
+// pieces are culled together; sparse patch ids (larger than 16 x receivers + 1024) fall back to each
+// receiver's own plane. `patch_state` is scratch kept between calls.
+void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,
+                     std::vector<std::uint8_t>& front);
+
+// Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
+// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side).
+std::uint32_t frustum_outcode(const Vec3& local);
+inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
+
+// Largest number of vertices clip_to_face can return for an m-gon: every plane adds at most one.
+inline constexpr std::size_t clipped_capacity(std::size_t m) { return m + 4; }
+
+// Clips a polygon given in local coordinates to the frustum of `face` (Sutherland-Hodgman with exact
+// sidedness, canonical intersection points and snapping; see the top of this file) and returns the polygon
+// in face coordinates (a, l1, l2) in `out` (capacity clipped_capacity(polygon.size())), or 0 vertices when
+// nothing is left. `scratch` needs the same capacity. `outside_mask` is the OR of the vertices' outcodes:
+// planes no vertex is outside of are skipped.
+std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face, std::uint32_t outside_mask,
+                         std::span<Vec3> scratch, std::span<Vec3> out);
+
+// Pixel coordinates of a point in face coordinates with a > 0 (see the top of this file).
+inline Vec2 project_to_pixels(HemicubeFace face, const Vec3& f, double half_resolution) {
+  const double x = (f.y / f.x + 1.0) * half_resolution;
+  const double y = face == HemicubeFace::kTop ? (f.z / f.x + 1.0) * half_resolution : (f.z / f.x) * half_resolution;
+  return {x, y};
+}
+
+// 1 / depth of a receiver plane along the rays of a face, as an affine function of pixel coordinates:
+// the ray through pixel point (x, y) meets the plane at axis coordinate a = 1 / (alpha x + beta y + gamma).
+// (1 / depth is affine in screen space, which makes it cheap per pixel.)
+struct InverseDepth {
+  double alpha = 0.0, beta = 0.0, gamma = 0.0;
+  double at(double x, double y) const { return alpha * x + beta * y + gamma; }
+};
+InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, double half_resolution);
+
+// Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
+// receiver may reach. Reused across shots without reallocating once warmed up.
+class PreparedReceivers {
+ public:
+  // Fills everything for `shooter` over all receivers (all occlude); parallel over receivers, deterministic.
+  void prepare(const Shooter& shooter, const ReceiverView& receivers);
+
+  std::span<const Vec3> local_polygon(std::size_t i) const {
+    return {local_.data() + offsets_[i], local_.data() + offsets_[i + 1]};
+  }
+  // Bit f set when receiver i is not culled and may touch face f.
+  std::uint8_t face_mask(std::size_t i) const { return face_mask_[i]; }
+  // OR of the outcodes of receiver i's vertices.
+  std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
+  const Plane& local_plane(std::size_t i) const { return local_planes_[i]; }
+  std::size_t size() const { return face_mask_.size(); }
+
+ private:
+  std::span<const std::uint32_t> offsets_;
+  std::vector<Vec3> local_;
+  std::vector<std::uint32_t> outcode_;
+  std::vector<std::uint32_t> outside_;
+  std::vector<std::uint8_t> face_mask_;
+  std::vector<Plane> local_planes_;
+  std::vector<std::uint8_t> patch_state_;
+  std::vector<std::uint8_t> front_;
+};
+
+// out[i] = the five faces' partial sums added in face order (deterministic whatever the thread count), for
+// every i of `subset` (every receiver when it is empty).
+void combine_face_sums(const std::array<std::vector<double>, kHemicubeFaces>& face_sums,
+                       std::span<const std::uint32_t> subset, std::span<double> out);
+
+// Checks a resolution for the back ends; throws aarad::Error naming the accepted range.
+void check_resolution(int resolution);
+
+}  // namespace aarad::formfactor

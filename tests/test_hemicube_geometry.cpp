@@ -1,0 +1,205 @@
+// Hemicube geometry: delta form-factor tables (Cohen and Greenberg 1985; references.md), the shooter's frame,
+// culling, and exact clipping to the five faces (Chandran et al. section 3.2).
+#include "core/error.h"
+#include "formfactor/analytic.h"
+#include "formfactor/backend.h"
+#include "formfactor/hemicube_geometry.h"
+#include "formfactor_fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace aarad::formfactor {
+namespace {
+
+using testing::Polygon;
+
+TEST(HemicubeGeometry, ExactDeltaTablesSumToOne) {
+  for (int n : {2, 7, 100, 101, 300}) {
+    const HemicubeGeometry g(n);
+    EXPECT_LT(std::abs(g.total() - 1.0), 5e-5) << n;
+    EXPECT_NEAR(g.total(), 1.0, 1e-12) << n;
+    EXPECT_NEAR(g.face_total(HemicubeFace::kTop), 0.5541264, 5e-8) << n;
+    for (HemicubeFace f : {HemicubeFace::kPosU, HemicubeFace::kNegU, HemicubeFace::kPosV, HemicubeFace::kNegV})
+      EXPECT_NEAR(g.face_total(f), 0.1114684, 5e-8) << n;
+  }
+}
+
+TEST(HemicubeGeometry, MidpointDeltaTablesMatchPublishedQuantisation) {
+  // references.md: sum - 1 is about 8.6e-3 at R = 8, 5.3e-4 at R = 32, 3.3e-5 at R = 128.
+  EXPECT_NEAR(HemicubeGeometry(8, DeltaRule::kMidpoint).total() - 1.0, 8.6e-3, 0.05e-3);
+  EXPECT_NEAR(HemicubeGeometry(32, DeltaRule::kMidpoint).total() - 1.0, 5.3e-4, 0.05e-4);
+  EXPECT_NEAR(HemicubeGeometry(128, DeltaRule::kMidpoint).total() - 1.0, 3.3e-5, 0.05e-5);
+  // O(1 / R^2): doubling R quarters the error.
+  for (int n : {16, 64, 256}) {
+    const double e1 = HemicubeGeometry(n, DeltaRule::kMidpoint).total() - 1.0;
+    const double e2 = HemicubeGeometry(2 * n, DeltaRule::kMidpoint).total() - 1.0;
+    EXPECT_NEAR(e1 / e2, 4.0, 0.01) << n;
+  }
+  // The midpoint rule's error at N = 100 (5.42e-5) is why the back ends use the exact cell integrals.
+  EXPECT_NEAR(HemicubeGeometry(100, DeltaRule::kMidpoint).total() - 1.0, 5.42e-5, 0.01e-5);
+}
+
+TEST(HemicubeGeometry, OddResolutionHalfRow) {
+  const HemicubeGeometry g(7);
+  EXPECT_EQ(g.height(HemicubeFace::kPosU), 4);
+  EXPECT_DOUBLE_EQ(g.sample_y(HemicubeFace::kPosU, 3), 3.25);
+  EXPECT_DOUBLE_EQ(g.sample_y(HemicubeFace::kPosU, 2), 2.5);
+  // The half row's delta form factor is the integral over its lower half only.
+  const double half_row = side_corner_form_factor(1.0, 1.0) - side_corner_form_factor(-1.0, 1.0) -
+                          side_corner_form_factor(1.0, 6.0 / 7.0) + side_corner_form_factor(-1.0, 6.0 / 7.0);
+  double row = 0.0;
+  for (int x = 0; x < 7; ++x) row += g.delta(HemicubeFace::kPosU)[3 * 7 + x];
+  EXPECT_NEAR(row, half_row, 1e-15);
+  EXPECT_NEAR(g.coverage_weight(HemicubeFace::kPosU)[3 * 7 + 2], 2.0 * g.delta(HemicubeFace::kPosU)[3 * 7 + 2], 1e-18);
+}
+
+TEST(HemicubeGeometry, ShooterFrameIsRightHandedAndDeterministic) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g;
+  for (int k = 0; k < 100; ++k) {
+    const Vec3 n = glm::normalize(Vec3(g(rng), g(rng), g(rng)));
+    const Shooter s = Shooter::from_normal(Vec3(1, 2, 3), n);
+    EXPECT_NEAR(glm::length(s.tangent), 1.0, 1e-15);
+    EXPECT_NEAR(glm::dot(s.tangent, s.normal), 0.0, 1e-15);
+    EXPECT_NEAR(glm::length(glm::cross(s.tangent, s.bitangent) - s.normal), 0.0, 1e-15);
+    const Shooter again = Shooter::from_normal(Vec3(1, 2, 3), n);
+    EXPECT_EQ(s.tangent, again.tangent);
+  }
+  const Shooter up = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
+  EXPECT_EQ(up.tangent, Vec3(1, 0, 0));
+  EXPECT_EQ(up.bitangent, Vec3(0, 1, 0));
+}
+
+TEST(HemicubeGeometry, BackFaceCullingIsExact) {
+  ReceiverView view;
+  testing::add(view, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);  // faces down: seen
+  testing::add(view, testing::rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0}), 1, 1);  // faces up: culled
+  testing::add(view, testing::rectangle({1, 0, 0}, {1, 0, 0}, {0, 1, 0}), 2, 2);  // coplanar with the point
+  // A second piece of patch 0 with a plane that would not face the point: the patch decides.
+  view.add(testing::rectangle({0, 0, 2}, {0, 1, 0}, {1, 0, 0}), Plane{{0, 0, 1}, -2.0}, 0, 0);
+  std::vector<std::uint8_t> state, front;
+  cull_back_faces(Vec3(0), view, state, front);
+  EXPECT_EQ(front, (std::vector<std::uint8_t>{1, 0, 0, 1}));
+  EXPECT_TRUE(faces_point(Plane{{0, 0, -1}, 1.0}, Vec3(0, 0, 1.0 - 1e-16)));
+  EXPECT_FALSE(faces_point(Plane{{0, 0, -1}, 1.0}, Vec3(0, 0, 1.0)));
+}
+
+// Clips a polygon (local coordinates) to every face and returns the face pieces back in local coordinates.
+std::vector<Polygon> clip_to_all_faces(const Polygon& local) {
+  std::vector<Polygon> pieces;
+  std::uint32_t any = 0;
+  for (const Vec3& v : local) any |= frustum_outcode(v);
+  std::vector<Vec3> scratch(clipped_capacity(local.size())), out(clipped_capacity(local.size()));
+  for (int f = 0; f < kHemicubeFaces; ++f) {
+    const auto face = static_cast<HemicubeFace>(f);
+    const std::size_t m = clip_to_face(local, face, any, scratch, out);
+    Polygon piece;
+    for (std::size_t k = 0; k < m; ++k) {
+      const Vec3& q = out[k];  // (a, l1, l2) back to (u, v, w)
+      switch (face) {
+        case HemicubeFace::kTop: piece.push_back({q.y, q.z, q.x}); break;
+        case HemicubeFace::kPosU: piece.push_back({q.x, q.y, q.z}); break;
+        case HemicubeFace::kNegU: piece.push_back({-q.x, q.y, q.z}); break;
+        case HemicubeFace::kPosV: piece.push_back({q.y, q.x, q.z}); break;
+        case HemicubeFace::kNegV: piece.push_back({q.y, -q.x, q.z}); break;
+      }
+    }
+    if (!piece.empty()) pieces.push_back(piece);
+  }
+  return pieces;
+}
+
+TEST(HemicubeGeometry, FacePiecesTileTheFrontPart) {
+  // Random triangles around the shooter: the form factors of the five face pieces add up to that of the
+  // part in front of the shooter's plane (complementary pieces: no gap, no overlap).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int k = 0; k < 500; ++k) {
+    Polygon tri = {{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}};
+    if (glm::dot(glm::cross(tri[1] - tri[0], tri[2] - tri[0]), tri[0]) > 0) tri = testing::reversed(tri);
+    std::vector<Vec3> front(4);
+    front.resize(clip_to_front(tri, front));
+    const double whole = polygon_form_factor(Vec3(0), Vec3(0, 0, 1), front);
+    double sum = 0.0;
+    for (const Polygon& piece : clip_to_all_faces(tri)) sum += polygon_form_factor(Vec3(0), Vec3(0, 0, 1), piece);
+    EXPECT_NEAR(sum, whole, 1e-12) << k;
+  }
+}
+
+TEST(HemicubeGeometry, SeamCutsLandExactlyOnFaceBorders) {
+  // A triangle across the seam between the top and the +u face: both pieces' seam vertices project exactly
+  // onto the shared border (x = N on the top, y = N/2 on the side), with equal lateral coordinates.
+  const Polygon tri = {{0.5, -0.3, 0.9}, {1.7, 0.2, 0.4}, {0.4, 0.6, 1.1}};
+  std::uint32_t any = 0;
+  for (const Vec3& v : tri) any |= frustum_outcode(v);
+  std::vector<Vec3> scratch(8), top(8), side(8);
+  const std::size_t mt = clip_to_face(tri, HemicubeFace::kTop, any, scratch, top);
+  const std::size_t ms = clip_to_face(tri, HemicubeFace::kPosU, any, scratch, side);
+  ASSERT_GT(mt, 0u);
+  ASSERT_GT(ms, 0u);
+  std::vector<double> top_seam, side_seam;
+  for (std::size_t k = 0; k < mt; ++k) {
+    const Vec2 p = project_to_pixels(HemicubeFace::kTop, top[k], 50.0);
+    if (p.x == 100.0) top_seam.push_back(p.y);
+  }
+  for (std::size_t k = 0; k < ms; ++k) {
+    const Vec2 p = project_to_pixels(HemicubeFace::kPosU, side[k], 50.0);
+    if (p.y == 50.0) side_seam.push_back(p.x);
+  }
+  ASSERT_EQ(top_seam.size(), 2u);
+  ASSERT_EQ(side_seam.size(), 2u);
+  std::sort(top_seam.begin(), top_seam.end());
+  std::sort(side_seam.begin(), side_seam.end());
+  EXPECT_NEAR(top_seam[0], side_seam[0], 1e-12);
+  EXPECT_NEAR(top_seam[1], side_seam[1], 1e-12);
+}
+
+TEST(HemicubeGeometry, SharedEdgeCutsAreBitIdentical) {
+  // Two triangles sharing an edge that crosses a frustum plane get the same cut point.
+  const Vec3 a{1.4, 0.3, 0.8}, b{0.2, -0.1, 1.2};
+  const Polygon t1 = {a, b, {0.9, 0.8, 1.0}}, t2 = {b, a, {0.6, -0.9, 0.9}};
+  std::vector<Vec3> scratch(8), o1(8), o2(8);
+  const std::size_t m1 = clip_to_face(t1, HemicubeFace::kTop, ~0u, scratch, o1);
+  const std::size_t m2 = clip_to_face(t2, HemicubeFace::kTop, ~0u, scratch, o2);
+  int shared = 0;
+  for (std::size_t i = 0; i < m1; ++i)
+    for (std::size_t j = 0; j < m2; ++j) shared += o1[i] == o2[j];
+  EXPECT_EQ(shared, 2);  // b and the cut point on the seam plane
+}
+
+TEST(HemicubeGeometry, InverseDepthIsAffineInPixels) {
+  const Shooter s = testing::rotated_shooter(Vec3(0.1, 0.2, 0.3), glm::normalize(Vec3(0.2, -0.1, 1.0)), 0.4);
+  const Polygon quad = testing::rectangle({-2, -2, 2.5}, {0, 5, 0.5}, {5, 0, 0.3});
+  const Plane local = plane_to_local(s, plane_of(quad));
+  for (int f = 0; f < kHemicubeFaces; ++f) {
+    const auto face = static_cast<HemicubeFace>(f);
+    const InverseDepth d = inverse_depth(face, local, 50.0);
+    for (const Vec3& v : quad) {
+      const Vec3 q = to_face(face, to_local(s, v));
+      if (q.x <= 0) continue;
+      const Vec2 p = project_to_pixels(face, q, 50.0);
+      EXPECT_NEAR(d.at(p.x, p.y), 1.0 / q.x, 1e-12);
+    }
+  }
+}
+
+TEST(HemicubeGeometry, ResolutionOutOfRangeIsRefused) {
+  EXPECT_THROW(make_backend("aa-hemicube", {.resolution = 1}), Error);
+  EXPECT_THROW(make_backend("hemicube", {.resolution = 8193}), Error);
+  EXPECT_NO_THROW(make_backend("hemicube", {.resolution = 2}));
+  try {
+    make_backend("raycast");
+    FAIL();
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("aa-hemicube"), std::string::npos);
+    EXPECT_NE(what.find("hemicube"), std::string::npos);
+    EXPECT_NE(what.find("analytic"), std::string::npos);
+  }
+  for (const std::string& name : backend_names()) EXPECT_EQ(make_backend(name)->name(), name);
+}
+
+}  // namespace
+}  // namespace aarad::formfactor
