@@ -100,59 +100,15 @@ bool inside(const std::vector<Vec2>& polygon, const Vec2& p) {
   return in;
 }
 
-// Any other surface: constrained Delaunay mesh of the union of its faces, then m x m similar triangles per
-// patch. Points on a patch edge are computed from the edge's lower-index end, so both patches sharing the
-// edge get bit-identical points.
-SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double patch_size, double element_size) {
-  const Frame frame = frame_of(surface.plane, scene.faces[surface.faces.front()].vertices.front());
-  std::vector<std::vector<Vec2>> polygons;
-  std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
-  Cdt cdt;
-  for (const std::uint32_t fi : surface.faces) {
-    const Face& face = scene.faces[fi];
-    std::vector<Vec2> polygon;
-    for (const Vec3& v : face.vertices) {
-      polygon.push_back(frame.to_2d(v));
-      original.emplace(std::make_pair(polygon.back().x, polygon.back().y), v);
-    }
-    for (std::size_t i = 0; i < polygon.size(); ++i) {
-      const Vec2& a = polygon[i];
-      const Vec2& b = polygon[(i + 1) % polygon.size()];
-      if (a != b) cdt.insert_constraint(Point2(a.x, a.y), Point2(b.x, b.y));
-    }
-    polygons.push_back(std::move(polygon));
-  }
-  auto in_domain = [&](const Vec2& p) {
-    return std::any_of(polygons.begin(), polygons.end(), [&](const auto& poly) { return inside(poly, p); });
-  };
-  std::vector<Point2> seeds;  // one point in every region outside the surface (holes), which is not meshed
-  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-    const Point2 c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
-    if (!in_domain({c.x(), c.y()})) seeds.push_back(c);
-  }
-  CGAL::refine_Delaunay_mesh_2(cdt, seeds.begin(), seeds.end(), Criteria(0.125, patch_size), false);
-
-  SurfaceMeshing out;
-  std::map<Cdt::Vertex_handle, int> vertex_index;
-  auto index_of = [&](Cdt::Vertex_handle v) {
-    auto [it, inserted] = vertex_index.emplace(v, static_cast<int>(out.points.size()));
-    if (inserted) {
-      const auto found = original.find({v->point().x(), v->point().y()});
-      out.points.push_back(found != original.end() ? found->second
-                                                   : frame.to_3d({v->point().x(), v->point().y()}));
-    }
-    return it->second;
-  };
+// Divides every triangle patch into m x m similar triangles, m the same over the surface so patches sharing
+// an edge conform. Points on a patch edge are computed from the edge's lower-index end, so both patches get
+// bit-identical points.
+void divide_triangle_patches(SurfaceMeshing& out, double element_size) {
   double longest = 0.0;
-  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-    if (!f->is_in_domain()) continue;
-    const CornerIndices patch{index_of(f->vertex(0)), index_of(f->vertex(1)), index_of(f->vertex(2)), -1};
+  for (const CornerIndices& patch : out.patches)
     for (int k = 0; k < 3; ++k)
-      longest = std::max(longest, glm::length(out.points[patch[(k + 1) % 3]] - out.points[patch[k]]));
-    out.patches.push_back(patch);
-  }
-  if (out.patches.empty())
-    throw Error("initial meshing: surface of group '" + scene.groups[surface.group].name + "' has no area to mesh");
+      longest = std::max(longest, glm::length(out.points[static_cast<std::size_t>(patch[(k + 1) % 3])] -
+                                              out.points[static_cast<std::size_t>(patch[k])]));
   const int m = divisions(longest, element_size);
 
   // Points along patch edges, keyed by the edge's (lower, higher) point index.
@@ -197,6 +153,82 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
       }
     out.elements.push_back(std::move(elements));
   }
+}
+
+// One triangle: an n x n grid of similar triangle patches (no edge longer than patch_size), then elements.
+SurfaceMeshing mesh_triangle(std::span<const Vec3> c, double patch_size, double element_size) {
+  const double longest =
+      std::max({glm::length(c[1] - c[0]), glm::length(c[2] - c[1]), glm::length(c[0] - c[2])});
+  const int n = divisions(longest, patch_size);
+  SurfaceMeshing out;
+  std::vector<int> row_start;  // grid point (i, j), i + j <= n, is row_start[j] + i
+  for (int j = 0; j <= n; ++j) {
+    row_start.push_back(static_cast<int>(out.points.size()));
+    for (int i = 0; i + j <= n; ++i) {
+      const double s = static_cast<double>(i) / n, t = static_cast<double>(j) / n;
+      out.points.push_back(i + j == n && j == 0 ? c[1] : (j == n ? c[2] : c[0] + s * (c[1] - c[0]) + t * (c[2] - c[0])));
+    }
+  }
+  auto at = [&](int i, int j) { return row_start[static_cast<std::size_t>(j)] + i; };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + j < n; ++i) {
+      out.patches.push_back({at(i, j), at(i + 1, j), at(i, j + 1), -1});
+      if (i + j + 1 < n) out.patches.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), -1});
+    }
+  divide_triangle_patches(out, element_size);
+  return out;
+}
+
+// Any other surface: constrained Delaunay mesh of the union of its faces (shared edges and T-junctions
+// between its faces become shared triangulation vertices, so the result conforms), then elements.
+SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double patch_size, double element_size) {
+  const Frame frame = frame_of(surface.plane, scene.faces[surface.faces.front()].vertices.front());
+  std::vector<std::vector<Vec2>> polygons;
+  std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
+  Cdt cdt;
+  for (const std::uint32_t fi : surface.faces) {
+    const Face& face = scene.faces[fi];
+    std::vector<Vec2> polygon;
+    for (const Vec3& v : face.vertices) {
+      polygon.push_back(frame.to_2d(v));
+      original.emplace(std::make_pair(polygon.back().x, polygon.back().y), v);
+    }
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+      const Vec2& a = polygon[i];
+      const Vec2& b = polygon[(i + 1) % polygon.size()];
+      if (a != b) cdt.insert_constraint(Point2(a.x, a.y), Point2(b.x, b.y));
+    }
+    polygons.push_back(std::move(polygon));
+  }
+  auto in_domain = [&](const Vec2& p) {
+    return std::any_of(polygons.begin(), polygons.end(), [&](const auto& poly) { return inside(poly, p); });
+  };
+  std::vector<Point2> seeds;  // one point in every region outside the surface (holes), which is not meshed
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    const Point2 c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
+    if (!in_domain({c.x(), c.y()})) seeds.push_back(c);
+  }
+  CGAL::refine_Delaunay_mesh_2(cdt, seeds.begin(), seeds.end(), Criteria(0.125, patch_size), false);
+
+  SurfaceMeshing out;
+  std::map<Cdt::Vertex_handle, int> vertex_index;
+  auto index_of = [&](Cdt::Vertex_handle v) {
+    auto [it, inserted] = vertex_index.emplace(v, static_cast<int>(out.points.size()));
+    if (inserted) {
+      const auto found = original.find({v->point().x(), v->point().y()});
+      out.points.push_back(found != original.end() ? found->second
+                                                   : frame.to_3d({v->point().x(), v->point().y()}));
+    }
+    return it->second;
+  };
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    if (!f->is_in_domain()) continue;
+    const CornerIndices patch{index_of(f->vertex(0)), index_of(f->vertex(1)), index_of(f->vertex(2)), -1};
+    out.patches.push_back(patch);
+  }
+  if (out.patches.empty())
+    throw Error("initial meshing: surface of group '" + scene.groups[surface.group].name + "' has no area to mesh");
+  divide_triangle_patches(out, element_size);
   return out;
 }
 
@@ -222,6 +254,7 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
     const std::vector<Vec3>& polygon = scene.faces[surface.faces.front()].vertices;
     if (strictly_convex_quad(polygon, frame_of(surface.plane, polygon.front())))
       return mesh_convex_quad(polygon, patch_size, element_size);
+    if (polygon.size() == 3 && aarad::area(polygon) > 0.0) return mesh_triangle(polygon, patch_size, element_size);
   }
   return mesh_general(scene, surface, patch_size, element_size);
 }

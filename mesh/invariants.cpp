@@ -76,6 +76,8 @@ class Checker {
   void check_tree() {
     std::size_t roots = 0;
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (m_.surface[n] >= m_.scene.surfaces.size())
+        report("levels-parents", n, "node ", n, " names surface ", m_.surface[n], ", which does not exist");
       const NodeId p = m_.parent[n];
       if (p == kNoNode) {
         ++roots;
@@ -229,7 +231,7 @@ class Checker {
         continue;
       }
       const NodeId n = mesh_.property(m_.face_node, inner);
-      if (!valid_node(n)) continue;
+      if (!valid_node(n) || m_.surface[n] >= m_.boundaries.size()) continue;
       const std::uint32_t s = m_.surface[n];
       const Vec3 a = point(h.from()), b = point(h.to());
       length[s] += glm::length(b - a);

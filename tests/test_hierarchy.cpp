@@ -1,0 +1,276 @@
+// Targeted tests of the patch/element hierarchy: initial meshing counts, splits, midpoint reuse, refusal,
+// balance, neighbours and radiosity inheritance. Expected numbers follow from the scene geometry by hand.
+#include "core/builtin_scenes.h"
+#include "mesh/hierarchy.h"
+#include "mesh/initial_meshing.h"
+#include "mesh/invariants.h"
+#include "mesh/leaf_mesh.h"
+#include "test_hierarchy_scenes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace aarad::mesh {
+namespace {
+
+using test::describe;
+
+MeshingOptions sizes(double patch, double element) {
+  MeshingOptions o;
+  o.patch_size = patch;
+  o.element_size = element;
+  return o;
+}
+
+double total_leaf_area(const Hierarchy& h) {
+  double sum = 0.0;
+  for (NodeId n : h.leaves()) sum += h.area(n);
+  return sum;
+}
+
+TEST(Hierarchy, DefaultsAreRelativeToTheSceneDiagonal) {
+  const Scene scene = test::square_scene();  // diagonal sqrt(2)
+  const MeshingOptions o = resolve_options(scene, MeshingOptions{});
+  EXPECT_DOUBLE_EQ(o.patch_size, std::sqrt(2.0) / 8.0);
+  EXPECT_DOUBLE_EQ(o.element_size, std::sqrt(2.0) / 16.0);
+  EXPECT_DOUBLE_EQ(o.min_area, 2e-7);
+  EXPECT_EQ(o.max_level, 8);
+  // patch edge 1/6 (ceil(1 / 0.1768) = 6 patches a side), 2 x 2 elements each.
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_EQ(h.patches().size(), 36u);
+  EXPECT_EQ(h.initial_element_count(), 144u);
+  EXPECT_EQ(h.leaf_count(), 144u);
+}
+
+TEST(Hierarchy, ConvexQuadBecomesABilinearGridOfQuads) {
+  const Hierarchy h(test::square_scene(), sizes(0.5, 0.25));
+  ASSERT_EQ(h.patches().size(), 4u);
+  EXPECT_EQ(h.leaf_count(), 16u);
+  EXPECT_EQ(h.node_count(), 20u);
+  for (NodeId p : h.patches()) {
+    EXPECT_EQ(h.level(p), 0);
+    EXPECT_EQ(h.parent(p), kNoNode);
+    EXPECT_EQ(h.patch(p), p);
+    EXPECT_DOUBLE_EQ(h.area(p), 0.25);
+    EXPECT_EQ(h.children(p).size(), 4u);
+    for (NodeId e : h.children(p)) {
+      EXPECT_EQ(h.level(e), 1);
+      EXPECT_EQ(h.patch(e), p);
+      EXPECT_EQ(h.corner_count(e), 4);
+      EXPECT_DOUBLE_EQ(h.area(e), 0.0625);
+    }
+  }
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+}
+
+TEST(Hierarchy, PatchNotCutFurtherStillHasOneElementChild) {
+  const Hierarchy h(test::square_scene(), sizes(1.0, 1.0));
+  ASSERT_EQ(h.patches().size(), 1u);
+  const NodeId p = h.patches()[0];
+  ASSERT_EQ(h.children(p).size(), 1u);
+  EXPECT_FALSE(h.is_leaf(p));
+  EXPECT_DOUBLE_EQ(h.area(h.children(p)[0]), 1.0);
+}
+
+TEST(Hierarchy, TriangleAndConcaveSurfacesBecomeConformingTriangles) {
+  const Hierarchy tri(test::triangle_scene(), sizes(2.0, 0.75));  // one patch, m = ceil(sqrt 2 / 0.75) = 2
+  EXPECT_EQ(tri.patches().size(), 1u);
+  EXPECT_EQ(tri.leaf_count(), 4u);
+  EXPECT_NEAR(total_leaf_area(tri), 0.5, 1e-15);
+  EXPECT_TRUE(check_invariants(tri).empty()) << describe(check_invariants(tri));
+
+  const Hierarchy l(test::l_scene(), sizes(0.6, 0.3));
+  EXPECT_GT(l.patches().size(), 6u);
+  for (NodeId n : l.leaves()) {
+    EXPECT_EQ(l.corner_count(n), 3);
+    EXPECT_LE(l.options().element_size, 0.3);
+  }
+  EXPECT_NEAR(total_leaf_area(l), 3.0, 1e-12);
+  const auto violations = check_invariants(l);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+  // No patch edge longer than patch_size.
+  for (NodeId p : l.patches()) {
+    const auto c = l.corners(p);
+    for (std::size_t k = 0; k < c.size(); ++k) EXPECT_LE(glm::length(c[(k + 1) % c.size()] - c[k]), 0.6 + 1e-12);
+  }
+}
+
+TEST(Hierarchy, CornellBoxMeshesEverySurfaceConformingly) {
+  const Scene scene = make_cornell_box();
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_GT(h.patches().size(), scene.surfaces.size());
+  EXPECT_GE(h.initial_element_count(), h.patches().size());
+  std::vector<double> area(scene.surfaces.size(), 0.0);
+  for (NodeId n : h.leaves()) area[h.surface(n)] += h.area(n);
+  for (std::size_t s = 0; s < scene.surfaces.size(); ++s)
+    EXPECT_NEAR(area[s], scene.surfaces[s].area, 1e-9 * scene.surfaces[s].area) << "surface " << s;
+  // One connected component per surface whose faces touch: the floor pieces share edges, so the floor's
+  // leaves all reach each other across edges.
+  const auto floor_group = scene.find_group("floor");
+  ASSERT_TRUE(floor_group.has_value());
+  const std::uint32_t floor = scene.groups[*floor_group].surfaces.at(0);
+  std::vector<NodeId> floor_leaves;
+  for (NodeId n : h.leaves())
+    if (h.surface(n) == floor) floor_leaves.push_back(n);
+  std::vector<NodeId> reached{floor_leaves.front()}, stack{floor_leaves.front()};
+  while (!stack.empty()) {
+    const NodeId n = stack.back();
+    stack.pop_back();
+    for (NodeId nb : h.edge_neighbours(n))
+      if (std::find(reached.begin(), reached.end(), nb) == reached.end()) {
+        EXPECT_EQ(h.surface(nb), floor);
+        reached.push_back(nb);
+        stack.push_back(nb);
+      }
+  }
+  EXPECT_EQ(reached.size(), floor_leaves.size());
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+}
+
+TEST(HierarchySplit, QuadSplitMakesFourQuadsThatInheritRadiosity) {
+  Hierarchy h(test::square_scene(), sizes(1.0, 1.0));
+  const NodeId e = h.children(h.patches()[0])[0];
+  h.radiosity(e) = Rgb(0.25, 0.5, 0.75);
+  h.radiosity(h.patches()[0]) = Rgb(0.25, 0.5, 0.75);
+  const std::uint64_t before = h.revision();
+  const SplitResult r = h.split(e);
+  ASSERT_TRUE(r.ok) << r.reason;
+  ASSERT_EQ(r.children.size(), 4u);
+  EXPECT_GT(h.revision(), before);
+  EXPECT_EQ(h.leaf_count(), 4u);
+  EXPECT_FALSE(h.is_leaf(e));
+  for (NodeId c : r.children) {
+    EXPECT_EQ(h.level(c), 2);
+    EXPECT_EQ(h.parent(c), e);
+    EXPECT_DOUBLE_EQ(h.area(c), 0.25);
+    EXPECT_EQ(h.radiosity(c), Rgb(0.25, 0.5, 0.75));
+    EXPECT_EQ(h.unshot(c), Rgb());
+  }
+  // Child k keeps corner k of its parent, counter-clockwise: child 0 is the lower-left quarter.
+  EXPECT_EQ(h.corners(r.children[0])[0], Vec3(0, 0, 0));
+  EXPECT_EQ(h.corners(r.children[0])[2], Vec3(0.5, 0.5, 0));
+  EXPECT_EQ(h.corners(r.children[2])[0], Vec3(1, 1, 0));
+  EXPECT_EQ(h.centroid(r.children[2]), Vec3(0.75, 0.75, 0));
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+}
+
+TEST(HierarchySplit, TriangleSplitMakesFourCongruentTriangles) {
+  Hierarchy h(test::triangle_scene(), sizes(2.0, 2.0));
+  ASSERT_EQ(h.leaf_count(), 1u);
+  const SplitResult r = h.split(h.leaves()[0]);
+  ASSERT_TRUE(r.ok) << r.reason;
+  for (NodeId c : r.children) {
+    EXPECT_EQ(h.corner_count(c), 3);
+    EXPECT_DOUBLE_EQ(h.area(c), 0.125);
+  }
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+}
+
+TEST(HierarchySplit, NeighbourGainsHangingVertexAndMidpointIsReused) {
+  // Two unit squares L = [0,1]^2 and R = [1,2]x[0,1].
+  Hierarchy h(test::rectangle_scene(), sizes(2.0, 1.0));
+  ASSERT_EQ(h.leaf_count(), 2u);
+  const NodeId left = h.leaves()[0], right = h.leaves()[1];
+  ASSERT_EQ(h.centroid(left), Vec3(0.5, 0.5, 0));
+  const LeafMesh& mesh = h.impl().mesh;
+  const std::size_t vertices = mesh.n_vertices();  // 6
+  ASSERT_EQ(vertices, 6u);
+
+  ASSERT_TRUE(h.split(right).ok);
+  EXPECT_EQ(mesh.n_vertices(), vertices + 5);  // four midpoints and the centre
+  std::vector<Vec3> polygon;
+  h.leaf_polygon(left, polygon);  // L gained the midpoint (1, 0.5) of the shared edge
+  ASSERT_EQ(polygon.size(), 5u);
+  EXPECT_NE(std::find(polygon.begin(), polygon.end(), Vec3(1, 0.5, 0)), polygon.end());
+  EXPECT_EQ(h.corners(left).size(), 4u);  // but keeps its four corners
+  // L's neighbours across the hanging vertex are the two left children of R.
+  auto neighbours = h.edge_neighbours(left);
+  std::sort(neighbours.begin(), neighbours.end());
+  std::vector<NodeId> expected{h.children(right)[0], h.children(right)[3]};
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(neighbours, expected);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+
+  ASSERT_TRUE(h.split(left).ok);
+  EXPECT_EQ(mesh.n_vertices(), vertices + 5 + 4);  // the shared midpoint was reused
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+}
+
+TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
+  MeshingOptions o = sizes(1.0, 1.0);
+  o.max_level = 2;
+  Hierarchy h(test::square_scene(), o);
+  const NodeId e = h.leaves()[0];
+  const SplitResult first = h.split(e);
+  ASSERT_TRUE(first.ok);
+  const SplitResult deep = h.split(first.children[0]);
+  EXPECT_FALSE(deep.ok);
+  EXPECT_NE(deep.reason.find("maximum level 2"), std::string::npos) << deep.reason;
+  const SplitResult inner = h.split(e);
+  EXPECT_FALSE(inner.ok);
+  EXPECT_NE(inner.reason.find("not a leaf"), std::string::npos) << inner.reason;
+  EXPECT_EQ(h.leaf_count(), 4u);
+
+  MeshingOptions small = sizes(1.0, 1.0);
+  small.min_area = 0.3;  // children would have 0.25
+  Hierarchy g(test::square_scene(), small);
+  const std::uint64_t revision = g.revision();
+  const SplitResult refused = g.split(g.leaves()[0]);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.reason.find("below min_area"), std::string::npos) << refused.reason;
+  EXPECT_EQ(g.revision(), revision);
+  EXPECT_EQ(g.leaf_count(), 1u);
+}
+
+TEST(HierarchySplit, BalanceSplitsCoarserNeighboursFirst) {
+  MeshingOptions o = sizes(2.0, 1.0);
+  o.balance = true;
+  Hierarchy h(test::rectangle_scene(), o);
+  const NodeId left = h.leaves()[0], right = h.leaves()[1];
+  const SplitResult r = h.split(right);
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(r.also_split.empty());
+  // Child 3 of R (top-left quarter) touches L; splitting it would put level 3 next to level 1.
+  const SplitResult deeper = h.split(r.children[3]);
+  ASSERT_TRUE(deeper.ok) << deeper.reason;
+  ASSERT_EQ(deeper.also_split, std::vector<NodeId>{left});
+  EXPECT_FALSE(h.is_leaf(left));
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+}
+
+TEST(HierarchySplit, AddRadiosityKeepsAncestorsAreaWeighted) {
+  Hierarchy h(test::square_scene(), sizes(1.0, 0.5));
+  const NodeId e = h.leaves()[0];
+  const SplitResult r = h.split(e);
+  ASSERT_TRUE(r.ok);
+  h.add_radiosity(r.children[1], Rgb(4.0, 8.0, 0.0));
+  // Child area 1/16: the element (1/4) rises by 1/4 of it, the patch (1) by 1/16.
+  EXPECT_DOUBLE_EQ(h.radiosity(e).r, 1.0);
+  EXPECT_DOUBLE_EQ(h.radiosity(h.patches()[0]).g, 0.5);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  h.radiosity(r.children[2]) = Rgb(1.0);
+  h.update_inner_radiosity();
+  EXPECT_DOUBLE_EQ(h.radiosity(e).r, 1.25);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+}
+
+TEST(Hierarchy, LeavesUnderAndMemory) {
+  Hierarchy h(test::square_scene(), sizes(1.0, 0.5));
+  const NodeId e = h.leaves()[0];
+  const SplitResult r = h.split(e);
+  ASSERT_TRUE(r.ok);
+  auto under = h.leaves_under(e);
+  auto children = r.children;
+  std::sort(children.begin(), children.end());
+  EXPECT_EQ(under, children);
+  EXPECT_EQ(h.leaves_under(h.patches()[0]).size(), 7u);
+  EXPECT_GT(h.memory_bytes(), 0u);
+}
+
+}  // namespace
+}  // namespace aarad::mesh

@@ -1,0 +1,180 @@
+// Every invariant broken on purpose (through Hierarchy::Impl, mesh/leaf_mesh.h) and reported by
+// check_invariants under its name; the intact structure reports nothing.
+#include "mesh/hierarchy.h"
+#include "mesh/invariants.h"
+#include "mesh/leaf_mesh.h"
+#include "test_hierarchy_scenes.h"
+
+#include <gtest/gtest.h>
+
+namespace aarad::mesh {
+namespace {
+
+using test::describe;
+using test::reports;
+
+// Two unit squares L and R; R split into four, so L carries a hanging vertex at (1, 0.5); child 0 of R
+// split again. Radiosities set and pushed up.
+Hierarchy refined(bool balance = false) {
+  MeshingOptions o;
+  o.patch_size = 2.0;
+  o.element_size = 1.0;
+  o.balance = balance;
+  Hierarchy h(test::rectangle_scene(), o);
+  const NodeId right = h.leaves()[1];
+  const SplitResult r = h.split(right);
+  EXPECT_TRUE(r.ok);
+  EXPECT_TRUE(h.split(r.children[0]).ok);
+  Rgb value(0.1, 0.2, 0.3);
+  for (NodeId n : h.leaves()) h.radiosity(n) = (value += Rgb(0.1));
+  h.update_inner_radiosity();
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+  return h;
+}
+
+NodeId left_leaf(const Hierarchy& h) { return h.leaves()[0]; }
+NodeId right_node(const Hierarchy& h) { return h.children(h.patches()[0])[1]; }
+
+TEST(InvariantBroken, ChildAreasNoLongerSumToParent) {
+  Hierarchy h = refined();
+  const NodeId child = h.children(right_node(h))[1];
+  h.impl().area[child] *= 1.0 + 1e-9;
+  EXPECT_TRUE(reports(check_invariants(h), "children-tile-parent")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, ChildrenOverlap) {
+  Hierarchy h = refined();
+  const auto children = h.children(right_node(h));
+  // Child 2 claims child 1's corners: same area in total, but two children overlap and one quarter is bare.
+  Hierarchy::Impl& m = h.impl();
+  m.corners[children[2]] = m.corners[children[1]];
+  const auto violations = check_invariants(h);
+  bool overlap = false;
+  for (const auto& v : violations) overlap |= v.invariant == "children-tile-parent" && v.message.find("overlap") != std::string::npos;
+  EXPECT_TRUE(overlap) << describe(violations);
+}
+
+TEST(InvariantBroken, ChildOutsideItsParentOrPlane) {
+  Hierarchy h = refined();
+  const NodeId grandchild = h.children(h.children(right_node(h))[0])[2];  // its corner 0 is R's centre
+  Hierarchy::Impl& m = h.impl();
+  const auto v = LeafMesh::VertexHandle(m.corners[grandchild][0]);
+  m.mesh.point(v)[2] += 1e-3;  // lift the centre of R off the plane
+  const auto violations = check_invariants(h);
+  bool off_plane = false;
+  for (const auto& x : violations) off_plane |= x.invariant == "children-tile-parent" && x.message.find("off the plane") != std::string::npos;
+  EXPECT_TRUE(off_plane) << describe(violations);
+}
+
+TEST(InvariantBroken, HalfEdgeLinksCorrupted) {
+  Hierarchy h = refined();
+  LeafMesh& mesh = h.impl().mesh;
+  const auto f = LeafMesh::FaceHandle(h.impl().face[left_leaf(h)]);
+  const auto first = mesh.halfedge_handle(f);
+  mesh.set_next_halfedge_handle(first, mesh.next_halfedge_handle(mesh.next_halfedge_handle(first)));
+  EXPECT_TRUE(reports(check_invariants(h), "leaf-mesh-manifold")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, HoleInTheLeafMeshIsACrack) {
+  Hierarchy h = refined();
+  LeafMesh& mesh = h.impl().mesh;
+  mesh.request_face_status();
+  mesh.request_edge_status();
+  mesh.request_vertex_status();
+  // Remove the face of one grandchild in the middle of R: its edges become open inside the surface.
+  const NodeId grandchild = h.children(h.children(right_node(h))[0])[2];
+  mesh.delete_face(LeafMesh::FaceHandle(h.impl().face[grandchild]), false);
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(reports(violations, "no-crack")) << describe(violations);
+  EXPECT_TRUE(reports(violations, "face-node-map")) << describe(violations);
+}
+
+TEST(InvariantBroken, OuterBoundaryMoved) {
+  Hierarchy h = refined();
+  LeafMesh& mesh = h.impl().mesh;
+  // Corner (0, 0) of L, on the outer boundary, moved outwards within the plane.
+  const auto v = LeafMesh::VertexHandle(h.impl().corners[left_leaf(h)][0]);
+  ASSERT_EQ(to_vec3(mesh.point(v)), Vec3(0, 0, 0));
+  mesh.point(v) = OpenMesh::Vec3d(-0.1, -0.1, 0.0);
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(reports(violations, "outer-boundary")) << describe(violations);
+  EXPECT_TRUE(reports(violations, "no-crack")) << describe(violations);
+}
+
+TEST(InvariantBroken, HangingVertexOffItsHostEdge) {
+  Hierarchy h = refined();
+  LeafMesh& mesh = h.impl().mesh;
+  // The hanging vertex (1, 0.5) on L's right edge, pushed into R.
+  for (auto v : mesh.fv_range(LeafMesh::FaceHandle(h.impl().face[left_leaf(h)])))
+    if (to_vec3(mesh.point(v)) == Vec3(1, 0.5, 0)) mesh.point(v)[0] += 1e-6;
+  EXPECT_TRUE(reports(check_invariants(h), "hanging-vertex-on-edge")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, LevelDisagreesWithParent) {
+  Hierarchy h = refined();
+  h.impl().level[h.children(right_node(h))[3]] = 3;
+  EXPECT_TRUE(reports(check_invariants(h), "levels-parents")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, ParentLinkDisagrees) {
+  Hierarchy h = refined();
+  h.impl().parent[h.children(right_node(h))[3]] = left_leaf(h);
+  EXPECT_TRUE(reports(check_invariants(h), "levels-parents")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, FaceMapsToTheWrongNode) {
+  Hierarchy h = refined();
+  Hierarchy::Impl& m = h.impl();
+  m.mesh.property(m.face_node, LeafMesh::FaceHandle(m.face[left_leaf(h)])) = right_node(h);
+  EXPECT_TRUE(reports(check_invariants(h), "face-node-map")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, LeafWithoutFace) {
+  Hierarchy h = refined();
+  h.impl().face[left_leaf(h)] = -1;
+  EXPECT_TRUE(reports(check_invariants(h), "face-node-map")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, LeavesOfTwoSurfacesShareAnEdge) {
+  Scene scene = test::rectangle_scene();
+  const std::uint32_t group = scene.add_group("lid");
+  scene.add_face(group, 0, {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}});  // a second surface above
+  scene.build_surfaces();
+  ASSERT_EQ(scene.surfaces.size(), 2u);
+  MeshingOptions o;
+  o.patch_size = 2.0;
+  o.element_size = 1.0;
+  Hierarchy h(scene, o);
+  ASSERT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  h.impl().surface[h.leaves()[0]] = 1;  // as if L belonged to the lid
+  EXPECT_TRUE(reports(check_invariants(h), "surface-component")) << describe(check_invariants(h));
+  h.impl().surface[h.leaves()[0]] = 7;  // a surface that does not exist
+  EXPECT_TRUE(reports(check_invariants(h), "levels-parents")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, BalanceViolatedWhenBalanceIsOn) {
+  // Child 0 of R is its lower-left quarter: its level-3 children border L (level 1), fine without balance.
+  Hierarchy h = refined(false);
+  EXPECT_TRUE(check_invariants(h).empty());
+  h.impl().options.balance = true;
+  EXPECT_TRUE(reports(check_invariants(h), "balance")) << describe(check_invariants(h));
+}
+
+TEST(InvariantBroken, InnerRadiosityIsNotTheMeanOfItsLeaves) {
+  Hierarchy h = refined();
+  h.radiosity(h.children(right_node(h))[2]).g += 1e-6;  // a leaf changed without its ancestors
+  EXPECT_TRUE(reports(check_invariants(h), "radiosity-mean")) << describe(check_invariants(h));
+  Hierarchy g = refined();
+  g.radiosity(g.patches()[0]).r *= 2.0;
+  EXPECT_TRUE(reports(check_invariants(g), "radiosity-mean")) << describe(check_invariants(g));
+}
+
+TEST(InvariantBroken, StoredAreaWrong) {
+  Hierarchy h = refined();
+  h.impl().area[left_leaf(h)] = 0.5;
+  EXPECT_TRUE(reports(check_invariants(h), "children-tile-parent")) << describe(check_invariants(h));
+}
+
+}  // namespace
+}  // namespace aarad::mesh
