@@ -1,0 +1,176 @@
+// Display reconstruction (vertex values, hanging-vertex interpolation, crack-free triangulation) and the PLY
+// export read back by OpenMesh.
+#include <OpenMesh/Core/IO/MeshIO.hh>
+
+#include "core/builtin_scenes.h"
+#include "mesh/display.h"
+#include "mesh/export_ply.h"
+#include "mesh/hierarchy.h"
+#include "mesh/leaf_mesh.h"
+#include "test_hierarchy_scenes.h"
+
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+
+namespace aarad::mesh {
+namespace {
+
+MeshingOptions sizes(double patch, double element) {
+  MeshingOptions o;
+  o.patch_size = patch;
+  o.element_size = element;
+  return o;
+}
+
+std::vector<Rgb> values_of(const Hierarchy& h) {
+  std::vector<Rgb> v(h.node_count());
+  for (NodeId n = 0; n < h.node_count(); ++n) v[n] = h.radiosity(n);
+  return v;
+}
+
+std::size_t index_of(const DisplayMesh& d, const Vec3& p) {
+  return static_cast<std::size_t>(std::find(d.positions.begin(), d.positions.end(), p) - d.positions.begin());
+}
+
+// Crack-free: every triangle edge inside a surface is shared by exactly two triangles with opposite
+// directions; the rest lie on the outer boundary; the triangles cover each surface's area, none degenerate.
+void expect_crack_free(const Hierarchy& h, const DisplayMesh& d) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  std::vector<double> area(h.scene().surfaces.size(), 0.0);
+  for (std::size_t t = 0; t < d.triangles.size(); ++t) {
+    const auto& tri = d.triangles[t];
+    const Vec3 a = d.positions[tri[0]], b = d.positions[tri[1]], c = d.positions[tri[2]];
+    const Vec3 n = glm::cross(b - a, c - a);
+    EXPECT_GT(glm::dot(n, h.plane(d.triangle_leaf[t]).normal), 1e-14 * glm::dot(b - a, b - a)) << "triangle " << t;
+    area[h.surface(d.triangle_leaf[t])] += 0.5 * glm::length(n);
+    for (int k = 0; k < 3; ++k) ++directed[{tri[static_cast<std::size_t>(k)], tri[static_cast<std::size_t>((k + 1) % 3)]}];
+  }
+  double boundary = 0.0;
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1);
+    if (!directed.count({edge.second, edge.first})) boundary += glm::length(d.positions[edge.second] - d.positions[edge.first]);
+  }
+  double initial_boundary = 0.0;
+  for (const auto& b : h.impl().boundaries) initial_boundary += b.length;
+  EXPECT_NEAR(boundary, initial_boundary, 1e-9 * initial_boundary);  // open edges only on the outer boundary
+  for (std::size_t s = 0; s < area.size(); ++s) EXPECT_NEAR(area[s], h.scene().surfaces[s].area, 1e-9 * h.scene().surfaces[s].area);
+}
+
+TEST(HierarchyDisplay, HangingVertexTakesTheInterpolationAlongItsHostEdge) {
+  // L = [0,1]^2 with B = 1; R = [1,2]x[0,1] split into quarters with B = 3, 5, 7, 9 (children 0..3 at R's
+  // corners (1,0), (2,0), (2,1), (1,1)). Vertex (1,0) is a corner of L (area 1) and of child 0 (area 1/4):
+  // (1 + 3/4) / 1.25 = 1.4. Vertex (1,1): (1 + 9/4) / 1.25 = 2.6. The hanging vertex (1, 0.5) on L's edge
+  // takes (1.4 + 2.6) / 2 = 2, not its own average over L, child 0 and child 3 ((1 + 0.75 + 2.25) / 1.5).
+  Hierarchy h(test::rectangle_scene(), sizes(2.0, 1.0));
+  const NodeId left = h.leaves()[0], right = h.leaves()[1];
+  const SplitResult r = h.split(right);
+  ASSERT_TRUE(r.ok);
+  h.radiosity(left) = Rgb(1.0);
+  for (int k = 0; k < 4; ++k) h.radiosity(r.children[static_cast<std::size_t>(k)]) = Rgb(3.0 + 2.0 * k);
+  const DisplayMesh d = build_display_mesh(h, values_of(h));
+  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1, 0, 0})].r, 1.4);
+  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1, 1, 0})].r, 2.6);
+  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1, 0.5, 0})].r, 2.0);
+  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {0, 0, 0})].r, 1.0);
+  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1.5, 0.5, 0})].r, 6.0);  // R's centre: mean of its four children
+  // L has five loop vertices: a fan of five triangles from its centre; R's children two each.
+  EXPECT_EQ(d.triangles.size(), 5u + 4u * 2u);
+  expect_crack_free(h, d);
+}
+
+TEST(HierarchyDisplay, NestedHangingVerticesInterpolateRecursively) {
+  // Split R, then its child 3 (upper-left quarter [1, 1.5] x [0.5, 1], touching L), then that child's child 0
+  // (its corner (1, 1): [1, 1.25] x [0.75, 1], touching L): L carries hanging vertices at y = 0.5, 0.75 and
+  // 0.875; (1, 0.875) hangs between (1, 0.75), itself hanging, and (1, 1), and every value is the linear
+  // interpolation of L's edge ends.
+  Hierarchy h(test::rectangle_scene(), sizes(2.0, 1.0));
+  const NodeId left = h.leaves()[0], right = h.leaves()[1];
+  const SplitResult r = h.split(right);
+  const SplitResult r3 = h.split(r.children[3]);
+  ASSERT_TRUE(h.split(r3.children[0]).ok);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(unit(rng), unit(rng), unit(rng));
+  (void)left;
+  const DisplayMesh d = build_display_mesh(h, values_of(h));
+  const Rgb lo = d.vertex_values[index_of(d, {1, 0, 0})], hi = d.vertex_values[index_of(d, {1, 1, 0})];
+  for (double y : {0.5, 0.75, 0.875}) {
+    ASSERT_LT(index_of(d, {1, y, 0}), d.positions.size());
+    const Rgb v = d.vertex_values[index_of(d, {1, y, 0})];
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], lo[c] * (1 - y) + hi[c] * y, 1e-15) << "y = " << y;
+  }
+  expect_crack_free(h, d);
+}
+
+TEST(HierarchyDisplay, RandomRefinementsOfTheCornellBoxTriangulateWithoutCracks) {
+  const Scene scene = make_cornell_box();
+  MeshingOptions o = sizes(scene.diagonal() / 4.0, scene.diagonal() / 8.0);
+  Hierarchy h(scene, o);
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 300; ++i) {
+    const auto leaves = h.leaves();
+    h.split(leaves[static_cast<std::size_t>(rng() % leaves.size())]);
+  }
+  for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(static_cast<double>(n % 7));
+  expect_crack_free(h, build_display_mesh(h, values_of(h)));
+}
+
+TEST(HierarchyExport, PlyIsBinaryAndReadsBackWithFaceProperties) {
+  Hierarchy h(test::rectangle_scene(), sizes(2.0, 1.0));
+  const SplitResult r = h.split(h.leaves()[1]);
+  ASSERT_TRUE(r.ok);
+  for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(0.25 * n, 0.5, 1.0 + n);
+  const auto dir = std::filesystem::path(AARAD_BINARY_DIR) / "test_hierarchy_export";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "mesh.ply";
+  std::filesystem::remove(path);
+  const ToneMap grey = [](const Rgb& b) {
+    const auto v = static_cast<std::uint8_t>(std::clamp(b.r * 40.0, 0.0, 255.0));
+    return std::array<std::uint8_t, 3>{v, v, v};
+  };
+  write_ply(h, values_of(h), grey, path);
+  ASSERT_TRUE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(dir / "mesh.ply.tmp"));
+  std::ifstream header(path, std::ios::binary);
+  std::string line;
+  std::string text;
+  while (std::getline(header, line) && line != "end_header") text += line + "\n";
+  EXPECT_NE(text.find("format binary_little_endian"), std::string::npos) << text;
+  for (const char* name : {"radiosity_r", "radiosity_g", "radiosity_b", "level", "patch", "red"})
+    EXPECT_NE(text.find(name), std::string::npos) << name << "\n" << text;
+
+  using ReadMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+  ReadMesh mesh;
+  mesh.request_vertex_colors();
+  OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary | OpenMesh::IO::Options::VertexColor |
+                                  OpenMesh::IO::Options::Custom;
+  ASSERT_TRUE(OpenMesh::IO::read_mesh(mesh, path.string(), options));
+  EXPECT_EQ(mesh.n_faces(), h.leaf_count());
+  EXPECT_EQ(mesh.n_vertices(), h.impl().mesh.n_vertices());
+  OpenMesh::FPropHandleT<float> radiosity_r, radiosity_b, level, patch;
+  ASSERT_TRUE(mesh.get_property_handle(radiosity_r, "radiosity_r"));
+  ASSERT_TRUE(mesh.get_property_handle(radiosity_b, "radiosity_b"));
+  ASSERT_TRUE(mesh.get_property_handle(level, "level"));
+  ASSERT_TRUE(mesh.get_property_handle(patch, "patch"));
+  const auto leaves = h.leaves();  // faces are written in leaf order
+  for (auto f : mesh.faces()) {
+    const NodeId n = leaves[static_cast<std::size_t>(f.idx())];
+    EXPECT_FLOAT_EQ(mesh.property(radiosity_r, f), static_cast<float>(0.25 * n));
+    EXPECT_FLOAT_EQ(mesh.property(radiosity_b, f), static_cast<float>(1.0 + n));
+    EXPECT_FLOAT_EQ(mesh.property(level, f), static_cast<float>(h.level(n)));
+    EXPECT_FLOAT_EQ(mesh.property(patch, f), static_cast<float>(h.patch(n)));
+  }
+  // The left square keeps its hanging vertex: a pentagon in the file.
+  EXPECT_EQ(mesh.valence(ReadMesh::FaceHandle(0)), 5u);
+  // Vertex (0,0,0) belongs only to L (B.r = 0.25 x its id): colour through the tone map.
+  const auto c = mesh.color(ReadMesh::VertexHandle(0));
+  EXPECT_EQ(c[0], grey(h.radiosity(leaves[0]))[0]);
+}
+
+}  // namespace
+}  // namespace aarad::mesh
