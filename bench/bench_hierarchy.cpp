@@ -1,0 +1,100 @@
+// Hierarchy refinement cost: the Cornell box refined uniformly (breadth first) and adaptively (towards the
+// edges of its faces, where radiosity changes fast: a leaf is split when its centroid lies within
+// 0.75 sqrt(area) of a face edge; with balance on) to 10^4, 10^5 and 10^6 leaves.
+// Reported: time per split (thread CPU time of split() calls only, balance splits included in the count) and bytes per leaf
+// (heap growth from mallinfo2, and the hierarchy's own container count). Goals (issue 4): time per split
+// within 1.5x across the sizes, under 1 KiB per leaf.
+#include "core/builtin_scenes.h"
+#include "mesh/hierarchy.h"
+
+#include <benchmark/benchmark.h>
+#include <malloc.h>
+
+#include <ctime>
+#include <deque>
+#include <limits>
+
+namespace {
+
+using aarad::Vec3;
+using aarad::mesh::Hierarchy;
+using aarad::mesh::NodeId;
+
+// CPU time of this thread: the machine is shared, so wall time would count other processes.
+double thread_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// Heap in use, including blocks glibc serves by mmap (large vectors).
+std::size_t heap_in_use() {
+  const struct mallinfo2 info = mallinfo2();
+  return info.uordblks + info.hblkhd;
+}
+
+double distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double t = std::clamp(glm::dot(p - a, d) / glm::dot(d, d), 0.0, 1.0);
+  return glm::length(a + t * d - p);
+}
+
+void refine(benchmark::State& state, bool adaptive) {
+  const auto target = static_cast<std::size_t>(state.range(0));
+  const aarad::Scene scene = aarad::make_cornell_box();
+  std::vector<std::array<Vec3, 2>> features;  // every face edge of the scene
+  for (const aarad::Face& f : scene.faces)
+    for (std::size_t i = 0; i < f.vertices.size(); ++i) features.push_back({f.vertices[i], f.vertices[(i + 1) % f.vertices.size()]});
+  aarad::mesh::MeshingOptions options;
+  options.max_level = 40;
+  options.min_area = 1e-14 * scene.diagonal() * scene.diagonal();
+  options.balance = adaptive;
+
+  for (auto _ : state) {
+    const std::size_t heap_before = heap_in_use();
+    Hierarchy h(scene, options);
+    std::deque<NodeId> work;
+    for (NodeId n : h.leaves()) work.push_back(n);
+    std::size_t splits = 0;
+    double seconds = 0.0;
+    while (h.leaf_count() < target && !work.empty()) {
+      const NodeId n = work.front();
+      work.pop_front();
+      if (!h.is_leaf(n)) continue;  // split by balancing meanwhile
+      if (adaptive) {
+        const Vec3 c = h.centroid(n);
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const auto& e : features) nearest = std::min(nearest, distance_to_segment(c, e[0], e[1]));
+        if (nearest > 0.75 * std::sqrt(h.area(n))) continue;
+      }
+      const double start = thread_seconds();
+      const aarad::mesh::SplitResult r = h.split(n);
+      seconds += thread_seconds() - start;
+      if (!r.ok) continue;
+      splits += 1 + r.also_split.size();
+      for (NodeId c : r.children) work.push_back(c);
+      for (NodeId s : r.also_split)
+        for (NodeId c : h.children(s)) work.push_back(c);
+    }
+    const std::size_t heap_after = heap_in_use();
+    state.counters["leaves"] = static_cast<double>(h.leaf_count());
+    state.counters["splits"] = static_cast<double>(splits);
+    state.counters["ns_per_split"] = 1e9 * seconds / static_cast<double>(splits);
+    state.counters["heap_bytes_per_leaf"] = static_cast<double>(heap_after - heap_before) / static_cast<double>(h.leaf_count());
+    state.counters["counted_bytes_per_leaf"] = static_cast<double>(h.memory_bytes()) / static_cast<double>(h.leaf_count());
+    int deepest = 0;
+    for (NodeId n = 0; n < h.node_count(); ++n) deepest = std::max(deepest, h.level(n));
+    state.counters["max_level"] = deepest;
+    if (h.leaf_count() < target) state.SkipWithError("refinement stopped before the target leaf count");
+  }
+}
+
+void BM_RefineUniform(benchmark::State& state) { refine(state, false); }
+void BM_RefineAdaptiveBalanced(benchmark::State& state) { refine(state, true); }
+
+BENCHMARK(BM_RefineUniform)->Arg(10000)->Arg(100000)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RefineAdaptiveBalanced)->Arg(10000)->Arg(100000)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
