@@ -45,9 +45,10 @@ Sign orientation(const Vec2& a, const Vec2& b, const Vec2& c) {
 }
 
 Sign orientation(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
-  // CGAL's orientation(p, q, r, s) is positive when s is on the negative side of the oriented plane pqr
-  // (the side from which p, q, r appear clockwise); flip it to the convention documented above.
-  return to_sign(-CGAL::orientation(point(p), point(q), point(r), point(s)));
+  // CGAL's orientation(p, q, r, s) is POSITIVE when s lies on the positive side of the oriented plane
+  // pqr, the side (q - p) x (r - p) points to (the sign of det[q - p, r - p, s - p]): the convention
+  // documented above, with no flip (tests/test_polygon.cpp checks it).
+  return to_sign(CGAL::orientation(point(p), point(q), point(r), point(s)));
 }
 
 Sign side_of_plane(const Vec3& origin, const Vec3& n, const Vec3& s) {
