@@ -271,7 +271,12 @@ std::vector<std::vector<Vec3>> checked_face(std::vector<Vec3> v, const std::stri
   for (const Vec3& p : v)
     if (distinct.empty() || p != distinct.back()) distinct.push_back(p);
   while (distinct.size() > 1 && distinct.front() == distinct.back()) distinct.pop_back();
-  if (distinct.size() < 3) {
+  std::size_t unique = 0;
+  for (std::size_t i = 0; i < distinct.size() && unique < 3; ++i)
+    if (std::find(distinct.begin(), distinct.begin() + static_cast<std::ptrdiff_t>(i), distinct[i]) ==
+        distinct.begin() + static_cast<std::ptrdiff_t>(i))
+      ++unique;
+  if (unique < 3) {
     warnings.push_back(InputError::format(path, line, "face with fewer than three distinct vertices skipped; fix its "
                                                       "vertex indices or remove it"));
     return {};

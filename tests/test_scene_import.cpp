@@ -1,0 +1,414 @@
+// Tests of the OBJ/MTL importer (core/obj_import.h) and the scene model (core/scene.h): every bad input of
+// issue 2 part 3 gives its error or warning, naming the file and line; groups and physical surfaces follow
+// the scene contract of shared/design.md; data/scenes/cornell.obj imports to the built-in Cornell box.
+#include "core/builtin_scenes.h"
+#include "core/error.h"
+#include "core/obj_import.h"
+#include "core/polygon.h"
+#include "core/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+namespace aarad {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh folder per test under the system's temporary folder, removed afterwards.
+class SceneImport : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("aarad_scene_import_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) const {
+    const fs::path path = dir_ / name;
+    std::ofstream(path) << text;
+    return path.string();
+  }
+
+  // The InputError that importing `path` throws (fails the test when there is none).
+  static InputError import_error(const std::string& path) {
+    try {
+      import_obj(path);
+    } catch (const InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "no InputError for " << path;
+    return InputError(path, 0, "none");
+  }
+
+  static bool has_warning(const Scene& scene, const std::string& needle) {
+    for (const std::string& w : scene.warnings)
+      if (w.find(needle) != std::string::npos) return true;
+    return false;
+  }
+
+  fs::path dir_;
+};
+
+// A unit square in z = 0 facing +z and a light above it, with a material library.
+const char* kSquareMtl =
+    "newmtl grey\n"
+    "Kd 0.5 0.5 0.5\n"
+    "newmtl lamp\n"
+    "Kd 0.2 0.2 0.2\n"
+    "Ke 4 4 4\n";
+
+// ---- Files ---------------------------------------------------------------------------------------------
+
+TEST_F(SceneImport, import_missing_obj_is_error_naming_file) {
+  const std::string path = (dir_ / "nowhere.obj").string();
+  const InputError e = import_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_EQ(e.line(), 0);
+  EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+  EXPECT_NE(e.message().find("no such file"), std::string::npos);
+}
+
+TEST_F(SceneImport, import_unreadable_obj_is_error_naming_file) {
+  // A folder where a file is expected cannot be read as an OBJ.
+  fs::create_directories(dir_ / "folder.obj");
+  const InputError e = import_error((dir_ / "folder.obj").string());
+  EXPECT_EQ(e.file(), (dir_ / "folder.obj").string());
+  EXPECT_NE(e.message().find("not a regular file"), std::string::npos);
+}
+
+TEST_F(SceneImport, import_missing_mtl_warns_and_uses_default_material) {
+  const std::string obj = write("a.obj",
+                                "mtllib missing.mtl\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "usemtl grey\n"
+                                "f 1 2 3 4\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.faces.size(), 1u);
+  const Material& m = scene.materials[scene.faces[0].material];
+  EXPECT_EQ(m.reflectance, Rgb(0.5));
+  EXPECT_EQ(m.emission, Rgb(0.0));
+  EXPECT_TRUE(has_warning(scene, obj + ":1: material library"));
+  EXPECT_TRUE(has_warning(scene, "missing.mtl"));
+  EXPECT_TRUE(has_warning(scene, obj + ":6: material 'grey' is not defined"));
+  EXPECT_TRUE(has_warning(scene, "no face emits light"));
+}
+
+TEST_F(SceneImport, import_obj_without_materials_uses_default_with_warning) {
+  const std::string obj = write("plain.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.materials.size(), 1u);
+  EXPECT_EQ(scene.materials[0].reflectance, Rgb(0.5));
+  EXPECT_TRUE(has_warning(scene, "faces without a material use the default"));
+}
+
+TEST_F(SceneImport, import_material_without_kd_warns_and_uses_grey) {
+  write("m.mtl", "newmtl bare\nKe 1 1 1\n");
+  const std::string obj = write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl bare\nf 1 2 3\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_EQ(scene.materials[scene.faces[0].material].reflectance, Rgb(0.5));
+  EXPECT_EQ(scene.materials[scene.faces[0].material].emission, Rgb(1.0));
+  EXPECT_TRUE(has_warning(scene, "m.mtl:1: material 'bare' has no Kd"));
+}
+
+// ---- Errors with lines ---------------------------------------------------------------------------------
+
+TEST_F(SceneImport, import_nan_coordinate_is_error_with_line) {
+  const std::string obj = write("nan.obj", "# a comment\nv 0 0 0\nv 1 nan 0\nv 1 1 0\nf 1 2 3\n");
+  const InputError e = import_error(obj);
+  EXPECT_EQ(e.file(), obj);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.message().find("not finite"), std::string::npos);
+  EXPECT_NE(std::string(e.what()).find(obj + ":3:"), std::string::npos);
+}
+
+TEST_F(SceneImport, import_infinite_coordinate_is_error_with_line) {
+  EXPECT_EQ(import_error(write("inf.obj", "v 0 0 0\nv 1 0 0\nv 1 1 -inf\nf 1 2 3\n")).line(), 3);
+  // Too large for a double: strtod gives infinity.
+  EXPECT_EQ(import_error(write("big.obj", "v 0 0 0\nv 1e999 0 0\nv 1 1 0\nf 1 2 3\n")).line(), 2);
+}
+
+TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
+  const InputError e = import_error(write("range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\n\nf 1 2 7\n"));
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_NE(e.message().find("out of range"), std::string::npos);
+}
+
+TEST_F(SceneImport, import_self_intersecting_face_is_error_with_line) {
+  // Planar bow-ties: a symmetric one (its signed area is zero) and a lopsided one, in a tilted plane.
+  const std::string head = "v 0 0 0\nv 1 1 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv 3 2 3\nv 3 0 3\nv 0 1 0\n";
+  const InputError symmetric = import_error(write("bow.obj", head + "f 1 2 3 4\n"));
+  EXPECT_EQ(symmetric.line(), 9);
+  EXPECT_NE(symmetric.message().find("intersects itself"), std::string::npos);
+  // Vertices 5-8 lie in the plane z = x; in (x, y) they are (0,0) (3,2) (3,0) (0,1), whose first and third
+  // edges cross at (1, 2/3). The valid triangle on line 10 comes first.
+  const InputError lopsided = import_error(write("bow2.obj", head + "o fine\nf 1 3 2\nf 5 6 7 8\n"));
+  EXPECT_EQ(lopsided.line(), 11);
+  EXPECT_NE(lopsided.message().find("intersects itself"), std::string::npos);
+}
+
+TEST_F(SceneImport, import_kd_outside_unit_interval_is_error_with_mtl_line) {
+  for (const std::string kd : {"1 0.5 0.5", "0.5 1.2 0.5", "0.5 0.5 -0.1", "nan 0.5 0.5"}) {
+    const std::string mtl = write("bad.mtl", "# materials\nnewmtl ok\nKd 0.5 0.5 0.5\n\nnewmtl hot\nKe 1 1 1\nKd " + kd + "\n");
+    const std::string obj = write("bad.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl hot\nf 1 2 3\n");
+    const InputError e = import_error(obj);
+    EXPECT_EQ(e.file(), mtl) << kd;
+    EXPECT_EQ(e.line(), 7) << kd;
+    EXPECT_NE(e.message().find("would not converge"), std::string::npos) << kd;
+    EXPECT_NE(e.message().find("'hot'"), std::string::npos) << kd;
+  }
+}
+
+TEST_F(SceneImport, import_negative_ke_is_error_with_mtl_line) {
+  const std::string mtl = write("neg.mtl", "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 -2 1\n");
+  const std::string obj = write("neg.obj", "mtllib neg.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n");
+  const InputError e = import_error(obj);
+  EXPECT_EQ(e.file(), mtl);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.message().find("Ke"), std::string::npos);
+  EXPECT_NE(e.message().find(">= 0"), std::string::npos);
+}
+
+TEST_F(SceneImport, import_empty_file_is_error) {
+  const InputError e = import_error(write("empty.obj", "# nothing\nv 0 0 0\n"));
+  EXPECT_NE(e.message().find("no usable faces"), std::string::npos);
+}
+
+// ---- Warnings: skipped and split faces -----------------------------------------------------------------
+
+TEST_F(SceneImport, import_degenerate_faces_are_skipped_with_warning) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("deg.obj",
+                                "mtllib s.mtl\n"                          // 1
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"    // 2-5
+                                "v 2 0 0\nv 3 0 0\n"                      // 6-7: vertices 5, 6
+                                "usemtl lamp\n"                           // 8
+                                "f 1 2\n"                                 // 9: two vertices
+                                "f 1 2 2\n"                               // 10: two distinct
+                                "f 1 2 1 2\n"                             // 11: two distinct
+                                "f 1 2 5\n"                               // 12: collinear, zero area
+                                "f 1 2 5 6\n"                             // 13: collinear, zero area
+                                "f 1 2 3 4\n");                           // 14: fine
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.faces.size(), 1u);
+  EXPECT_EQ(scene.faces[0].source_line, 14);
+  EXPECT_TRUE(has_warning(scene, obj + ":9: face with fewer than three vertices skipped"));
+  EXPECT_TRUE(has_warning(scene, obj + ":10: face with fewer than three distinct vertices skipped"));
+  EXPECT_TRUE(has_warning(scene, obj + ":11: face with fewer than three distinct vertices skipped"));
+  EXPECT_TRUE(has_warning(scene, obj + ":12: face of zero area"));
+  EXPECT_TRUE(has_warning(scene, obj + ":13: face of zero area"));
+  EXPECT_EQ(scene.warnings.size(), 5u);
+}
+
+TEST_F(SceneImport, import_non_planar_face_is_split_into_triangles_with_warning) {
+  // A unit square with one corner lifted by 0.2, and an L-shaped (concave) hexagon with one vertex
+  // lifted: both split, covering the same outline.
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("bent.obj",
+                                "mtllib s.mtl\nusemtl lamp\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0.2\nv 0 1 0\n"
+                                "v 0 0 5\nv 2 0 5\nv 2 1 5\nv 1 1 5.3\nv 1 2 5\nv 0 2 5\n"
+                                "o square\nf 1 2 3 4\n"
+                                "o ell\nf 5 6 7 8 9 10\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(has_warning(scene, obj + ":14: face is not planar"));
+  EXPECT_TRUE(has_warning(scene, obj + ":16: face is not planar"));
+  const Group& square = scene.groups[*scene.find_group("square")];
+  ASSERT_EQ(square.faces.size(), 2u);
+  double square_area = 0.0;
+  for (const std::uint32_t f : square.faces) {
+    EXPECT_EQ(scene.faces[f].vertices.size(), 3u);
+    EXPECT_EQ(scene.faces[f].source_line, 14);
+    EXPECT_GT(normal(scene.faces[f].vertices).z, 0.9);  // keeps the face's orientation
+    square_area += area(scene.faces[f].vertices);
+  }
+  // Whichever diagonal the split takes, the triangles cover the square's footprint exactly once and,
+  // being tilted, have more area than it.
+  double footprint = 0.0;
+  for (const std::uint32_t f : square.faces) footprint += vector_area(scene.faces[f].vertices).z;
+  EXPECT_NEAR(footprint, 1.0, 1e-15);
+  EXPECT_GT(square_area, 1.0);
+  const Group& ell = scene.groups[*scene.find_group("ell")];
+  EXPECT_EQ(ell.faces.size(), 4u);  // a hexagon gives four triangles
+  double ell_footprint = 0.0;
+  for (const std::uint32_t f : ell.faces) ell_footprint += vector_area(scene.faces[f].vertices).z;
+  EXPECT_NEAR(ell_footprint, 3.0, 1e-14);
+}
+
+TEST_F(SceneImport, import_concave_planar_face_is_kept_whole) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("ell.obj",
+                                "mtllib s.mtl\nusemtl lamp\n"
+                                "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nf 1 2 3 4 5 6\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.faces.size(), 1u);
+  EXPECT_EQ(scene.faces[0].vertices.size(), 6u);
+  EXPECT_DOUBLE_EQ(scene.surfaces[0].area, 3.0);
+  EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+}
+
+// ---- Groups, surfaces, materials -----------------------------------------------------------------------
+
+TEST_F(SceneImport, import_groups_follow_nearest_o_or_g) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("groups.obj",
+                                "mtllib s.mtl\nusemtl lamp\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "f 1 2 3\n"           // before any o/g: the file's stem
+                                "o thing\nf 1 3 4\n"  // o
+                                "g part\nf 1 2 4\n"   // g overrides the o
+                                "o thing\nf 2 3 4\n"  // the same name again: the same group
+                                "g\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.groups.size(), 3u);
+  EXPECT_EQ(scene.groups[0].name, "groups");
+  EXPECT_EQ(scene.groups[1].name, "thing");
+  EXPECT_EQ(scene.groups[2].name, "part");
+  EXPECT_EQ(scene.groups[1].faces.size(), 2u);
+  EXPECT_EQ(scene.faces[scene.groups[2].faces[0]].source_line, 11);
+  EXPECT_EQ(scene.faces[scene.groups[1].faces[1]].source_line, 13);
+}
+
+TEST_F(SceneImport, import_coplanar_faces_of_a_group_form_one_surface) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("planes.obj",
+                                "mtllib s.mtl\nusemtl grey\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"  // 1-6, z = 0
+                                "v 5 5 5\n"                                             // 7, for scale
+                                "v 0 0 1e-9\nv 1 0 1e-9\nv 1 1 1e-9\n"                  // 8-10, 1e-9 above
+                                "v 0 0 0.01\nv 1 0 0.01\nv 1 1 0.01\n"                  // 11-13, 0.01 above
+                                "g floor\n"
+                                "f 1 2 3 4\nf 2 5 6 3\n"    // two coplanar pieces facing +z: one surface
+                                "f 8 9 10\n"                 // within the tolerance: the same surface
+                                "f 11 12 13\n"               // 0.01 above: another surface
+                                "f 4 3 2 1\n"                // coplanar but facing -z: another surface
+                                "usemtl lamp\nf 2 5 6\n"     // same plane, other material: another surface
+                                "g other\nf 1 2 3\n"         // same plane, other group: another surface
+                                "g tall\nf 1 2 7\n");
+  const Scene scene = import_obj(obj);
+  const Group& floor = scene.groups[*scene.find_group("floor")];
+  ASSERT_EQ(floor.faces.size(), 6u);
+  ASSERT_EQ(floor.surfaces.size(), 4u);
+  const Surface& first = scene.surfaces[floor.surfaces[0]];
+  EXPECT_EQ(first.faces.size(), 3u);
+  EXPECT_DOUBLE_EQ(first.area, 2.5);
+  EXPECT_EQ(first.plane.normal, Vec3(0, 0, 1));
+  EXPECT_EQ(scene.surfaces[floor.surfaces[2]].plane.normal, Vec3(0, 0, -1));
+  EXPECT_EQ(scene.surfaces.size(), 6u);
+  for (std::uint32_t s = 0; s < scene.surfaces.size(); ++s)
+    for (const std::uint32_t f : scene.surfaces[s].faces) EXPECT_EQ(scene.faces[f].surface, s);
+}
+
+TEST_F(SceneImport, import_materials_and_emitters) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("lit.obj",
+                                "mtllib s.mtl\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "v 0 0 2\nv 0 1 2\nv 1 1 2\nv 1 0 2\n"
+                                "g floor\nusemtl grey\nf 1 2 3 4\n"
+                                "g light\nusemtl lamp\nf 5 6 7 8\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(scene.warnings.empty());
+  const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
+  EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));
+  EXPECT_EQ(scene.materials[light.material].reflectance, Rgb(0.2));
+  EXPECT_EQ(light.plane.normal, Vec3(0, 0, -1));
+  EXPECT_DOUBLE_EQ(light.plane.d, 2.0);
+  EXPECT_FALSE(scene.camera.has_value());
+  EXPECT_DOUBLE_EQ(scene.total_area(), 2.0);
+  EXPECT_EQ(scene.bounds_max(), Vec3(1, 1, 2));
+  EXPECT_DOUBLE_EQ(scene.diagonal(), std::sqrt(6.0));
+}
+
+TEST_F(SceneImport, import_camera_comment_is_read_back) {
+  const std::string obj = write("cam.obj",
+                                "# aarad camera: eye 1 2 3 forward 0 0 2 up 0 1 0 vertical_fov 0.5\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_TRUE(scene.camera.has_value());
+  EXPECT_EQ(scene.camera->eye, Vec3(1, 2, 3));
+  EXPECT_EQ(scene.camera->forward, Vec3(0, 0, 1));  // normalised
+  EXPECT_EQ(scene.camera->vertical_fov, 0.5);
+}
+
+TEST(SceneModel, scene_build_surfaces_tolerance_is_relative_to_scene_size) {
+  // The same pair of nearly coplanar squares 1e-4 apart, in a scene 1 across and in one 1e3 across:
+  // distinct surfaces in the first (1e-4 > 1e-6 x diagonal 2.45), one in the second (1e-4 < 1e-6 x 1000).
+  for (const double size : {1.0, 1e3}) {
+    Scene scene;
+    const std::uint32_t g = scene.add_group("g");
+    const std::uint32_t m = scene.add_material({"m", Rgb(0.5), Rgb(0.0)});
+    scene.add_face(g, m, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+    scene.add_face(g, m, {{1, 0, 1e-4}, {2, 0, 1e-4}, {2, 1, 1e-4}, {1, 1, 1e-4}});
+    scene.add_face(g, m, {{0, 0, size}, {0, 0.001, size}, {0.001, 0, size}});  // sets the scene's size
+    scene.build_surfaces();
+    EXPECT_EQ(scene.groups[g].surfaces.size(), size == 1.0 ? 3u : 2u) << size;
+  }
+}
+
+TEST(SceneModel, scene_validate_rejects_bad_materials) {
+  Scene scene;
+  scene.name = "handmade";
+  const std::uint32_t g = scene.add_group("g");
+  const std::uint32_t m = scene.add_material({"mirror", Rgb(1.0), Rgb(0.0)});
+  scene.add_face(g, m, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}});
+  scene.build_surfaces();
+  EXPECT_THROW(scene.validate(), InputError);
+  scene.materials[m].reflectance = Rgb(0.9);
+  EXPECT_NO_THROW(scene.validate());
+  scene.materials[m].emission = Rgb(1.0, -1.0, 0.0);
+  EXPECT_THROW(scene.validate(), InputError);
+}
+
+// ---- The Cornell box from data/ --------------------------------------------------------------------------
+
+TEST(SceneImportCornell, import_cornell_obj_matches_builtin) {
+  const std::string path = std::string(AARAD_SOURCE_DIR) + "/data/scenes/cornell.obj";
+  const Scene imported = import_obj(path);
+  const Scene builtin = make_cornell_box();
+  EXPECT_TRUE(imported.warnings.empty()) << imported.warnings.front();
+  ASSERT_EQ(imported.groups.size(), builtin.groups.size());
+  ASSERT_EQ(imported.surfaces.size(), builtin.surfaces.size());
+  ASSERT_EQ(imported.faces.size(), builtin.faces.size());
+  for (std::size_t g = 0; g < builtin.groups.size(); ++g) {
+    EXPECT_EQ(imported.groups[g].name, builtin.groups[g].name);
+    EXPECT_EQ(imported.groups[g].faces.size(), builtin.groups[g].faces.size());
+    EXPECT_EQ(imported.groups[g].surfaces.size(), builtin.groups[g].surfaces.size());
+  }
+  for (std::size_t s = 0; s < builtin.surfaces.size(); ++s) {
+    const Surface& a = imported.surfaces[s];
+    const Surface& b = builtin.surfaces[s];
+    EXPECT_EQ(imported.groups[a.group].name, builtin.groups[b.group].name);
+    EXPECT_EQ(a.area, b.area) << s;  // coordinates round-trip exactly
+    EXPECT_EQ(a.plane.normal, b.plane.normal) << s;
+    EXPECT_EQ(imported.materials[a.material].name, builtin.materials[b.material].name);
+    EXPECT_EQ(imported.materials[a.material].reflectance, builtin.materials[b.material].reflectance);
+    EXPECT_EQ(imported.materials[a.material].emission, builtin.materials[b.material].emission);
+  }
+  ASSERT_TRUE(imported.camera.has_value());
+  EXPECT_EQ(imported.camera->eye, builtin.camera->eye);
+  EXPECT_EQ(imported.camera->vertical_fov, builtin.camera->vertical_fov);
+}
+
+TEST(SceneImportCornell, scene_load_resolves_builtin_names_before_paths) {
+  EXPECT_EQ(load_scene("cornell").name, "cornell");
+  EXPECT_EQ(load_scene("furnace").name, "furnace");
+  const std::string path = std::string(AARAD_SOURCE_DIR) + "/data/scenes/furnace.obj";
+  EXPECT_EQ(load_scene(path).name, path);
+  try {
+    load_scene("cornel");
+    ADD_FAILURE() << "no error for an unknown name";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "cornel");
+    EXPECT_NE(e.message().find("cornell, office, furnace"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace aarad
