@@ -112,7 +112,11 @@ Solver::Solver(const Scene& scene, const SolverOptions& options)
 
 Solver::Solver(const Scene& scene, const SolverOptions& options,
                std::unique_ptr<formfactor::FormFactorBackend> backend)
-    : scene_(scene), options_(options), hierarchy_(scene, options.meshing), backend_(std::move(backend)) {
+    : scene_(scene),
+      options_(options),
+      hierarchy_(scene, options.meshing),
+      backend_(std::move(backend)),
+      scene_diagonal_(scene.diagonal()) {
   if (!backend_) throw Error("solver: no form-factor back end");
   if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
   if (options_.max_shots < 0) throw Error("solver: --max-shots must be >= 0");
@@ -173,9 +177,13 @@ mesh::NodeId Solver::pick_shooter() const {
 void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset) {
   const auto start = Clock::now();
   const Vec3 normal = hierarchy_.plane(shooter).normal;
+  // The shooting point is lifted off its surface by 1e-9 of the scene's size. A centroid computed in floating
+  // point lies a rounding error in front of or behind its own plane; lifted, its own surface lies strictly
+  // behind it, so the polygon containing the point never projects over the whole hemicube.
+  const Vec3 lift = normal * (1e-9 * scene_diagonal_);
   if (options_.shooter_samples <= 1) {
-    backend_->compute(formfactor::Shooter::from_normal(hierarchy_.centroid(shooter), normal), cache_.view(), subset,
-                      ff_);
+    backend_->compute(formfactor::Shooter::from_normal(hierarchy_.centroid(shooter) + lift, normal), cache_.view(),
+                      subset, ff_);
   } else {
     const auto samples = patch_samples(hierarchy_.corners(shooter), options_.shooter_samples);
     ff_sample_.assign(ff_.size(), 0.0);
@@ -188,7 +196,7 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     };
     for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
     for (const SamplePoint& sample : samples) {
-      backend_->compute(formfactor::Shooter::from_normal(sample.position, normal), cache_.view(), subset,
+      backend_->compute(formfactor::Shooter::from_normal(sample.position + lift, normal), cache_.view(), subset,
                         ff_sample_);
       for_each_receiver([&](std::uint32_t i) { ff_[i] += sample.weight * ff_sample_[i]; });
     }

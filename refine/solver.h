@@ -29,7 +29,7 @@ struct SolverOptions {
   bool adaptive = true;                 // adaptive substructuring on radiosity gradients
   // Split a leaf when the luminance of its radiosity differs from an edge-neighbour's by more than
   // gradient times the largest reflected radiosity luminance (B - E) of any leaf.
-  double gradient = 0.05;
+  double gradient = 0.1;
   // Gauss-Legendre points per direction on the shooting patch: 1 shoots from the centroid (the paper's
   // method); n > 1 averages the back end's point factors over n x n points, approximating the
   // patch-to-element form factor (used to check the loop against closed-form patch-to-patch values).
@@ -122,6 +122,7 @@ class Solver {
   mesh::Hierarchy hierarchy_;
   std::unique_ptr<formfactor::FormFactorBackend> backend_;
   ReceiverCache cache_;
+  double scene_diagonal_ = 0.0;
 
   std::vector<double> ff_;         // per receiver: form factor of the current shot
   std::vector<double> ff_sample_;  // per receiver: one sample point's factors
