@@ -60,18 +60,21 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
       double z = depth.at(px, py);
       if (!(z >= lo)) z = lo;
       if (z > hi) z = hi;
-      arena.insert(static_cast<std::size_t>(y) * width + x, CoverageEntry{1.0 / z, coverage, receiver, surface});
+      // Key -1/depth orders like the depth without a division; column-major like the rasterizer's visits.
+      arena.insert(static_cast<std::size_t>(x) * height + y, CoverageEntry{-z, coverage, receiver, surface});
     });
   }
-  face_entries_[static_cast<std::size_t>(face)] = arena.nodes_used();
+  face_entries_[static_cast<std::size_t>(face)] = arena.entries();
+  // Walk every list front to back, in the arena's column-major order.
   const std::span<const double> weight = geometry_.coverage_weight(face);
-  const std::size_t pixels = geometry_.pixels(face);
-  for (std::size_t p = 0; p < pixels; ++p) {
-    if (arena.empty(p)) continue;
-    const double w = weight[p];
-    arena.resolve(p, [&](std::uint32_t receiver, double visible) { sums[receiver] += visible * w; });
+  for (int x = 0; x < width; ++x) {
+    const std::size_t column = static_cast<std::size_t>(x) * height;
+    for (int y = 0; y < height; ++y) {
+      arena.prefetch(column + y + 8);
+      const double w = weight[static_cast<std::size_t>(y) * width + x];
+      arena.take(column + y, [&](std::uint32_t receiver, double visible) { sums[receiver] += visible * w; });
+    }
   }
-  (void)height;
 }
 
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,

@@ -1,23 +1,35 @@
 // Per-pixel coverage lists of the anti-aliased hemicube (Chandran, Kiran, Phani and Rai, section 3.2.1):
-// insertion sort into pooled linked lists. See coverage_list.h for the rules.
+// insertion sort into pooled linked lists. See coverage_list.h for the rules and the layout.
 #include "formfactor/coverage_list.h"
 
 namespace aarad::formfactor {
 
 void CoverageArena::reset(std::size_t pixels) {
-  heads_.assign(pixels, Head{});
+  if (live_ != 0) std::fill(slots_.begin(), slots_.end(), Slot{});
+  if (slots_.size() < pixels) slots_.resize(pixels);
   nodes_.clear();
+  live_ = 0;
+  entries_ = 0;
 }
 
-std::uint32_t CoverageArena::allocate(const CoverageEntry& entry, std::uint32_t next) {
-  nodes_.push_back(Node{entry.depth, entry.coverage, entry.receiver, entry.surface, next});
-  return static_cast<std::uint32_t>(nodes_.size() - 1);
-}
-
-bool CoverageArena::insert(std::size_t pixel, const CoverageEntry& entry) {
-  std::uint32_t prev = kNil, cur = heads_[pixel].head, before = kNil;
+bool CoverageArena::insert_partial(Slot& slot, const CoverageEntry& entry) {
+  ++entries_;
+  if (!(entry.depth < slot.depth)) return false;  // behind the nearest full entry
+  const bool was_empty = slot.receiver == kNone && slot.head == kNil;
+  std::uint32_t prev = kNil, cur = slot.head & kIndexMask, before = kNil;
   std::uint32_t prev_surface = kNoSurface;
   bool placed = false;
+  auto link = [&](std::uint32_t after) {
+    const auto added = static_cast<std::uint32_t>(nodes_.size());
+    const std::uint32_t next = after == kNil ? (slot.head & kIndexMask) : nodes_[after].next;
+    nodes_.push_back(Node{entry.depth, entry.coverage, entry.receiver, entry.surface, next});
+    if (after == kNil) {
+      slot.head = (slot.head & kFullBit) | added;
+    } else {
+      nodes_[after].next = added;
+    }
+    return added;
+  };
   while (cur != kNil) {
     const Node& node = nodes_[cur];
     if (node.surface == entry.surface) {
@@ -28,11 +40,10 @@ bool CoverageArena::insert(std::size_t pixel, const CoverageEntry& entry) {
         sum += nodes_[m].coverage;
         last = m;
       }
-      const std::uint32_t added = allocate(entry, nodes_[last].next);
-      nodes_[last].next = added;
+      const std::uint32_t added = link(last);
       if (sum >= kFullCoverage) {
         nodes_[added].next = kNil;  // everything behind a covering group is hidden
-        heads_[pixel].full = 1;
+        slot.head |= kFullBit;
       }
       return true;
     }
@@ -46,20 +57,11 @@ bool CoverageArena::insert(std::size_t pixel, const CoverageEntry& entry) {
     cur = node.next;
   }
   if (!placed) {
-    if (heads_[pixel].full != 0) return false;  // behind the covering group
+    if ((slot.head & kFullBit) != 0) return false;  // behind the covering group
     before = prev;
   }
-  const std::uint32_t next = before == kNil ? heads_[pixel].head : nodes_[before].next;
-  const std::uint32_t added = allocate(entry, next);
-  if (before == kNil) {
-    heads_[pixel].head = added;
-  } else {
-    nodes_[before].next = added;
-  }
-  if (entry.coverage >= kFullCoverage) {
-    nodes_[added].next = kNil;
-    heads_[pixel].full = 1;
-  }
+  if (was_empty) ++live_;
+  link(before);
   return true;
 }
 

@@ -1,0 +1,130 @@
+// Time per shot of the classical and the anti-aliased hemicube (Chandran, Kiran, Phani and Rai, section 4:
+// AA 10 s vs classical 6 s on the Cornell room, a 1.67x ratio) at N = 100, 300 and 1000, over the Cornell box
+// cut into about 4 000 receivers and the office (the paper's second scene) cut into about 16 000, shooting
+// from the centre of a light. BM_Pair runs both back ends on the same shot, alternately, and reports their
+// times and the AA / classical ratio as counters; BM_Shot times one back end alone.
+//
+//   build-bench/bench/bench_formfactor --benchmark_counters_tabular=true
+#include "core/builtin_scenes.h"
+#include "core/polygon.h"
+#include "formfactor/aa_hemicube.h"
+#include "formfactor/backend.h"
+#include "formfactor/hemicube.h"
+
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace aarad;
+using namespace aarad::formfactor;
+
+struct Shot {
+  ReceiverView receivers;
+  Shooter shooter;
+};
+
+// Every face of the scene fan-triangulated and each triangle cut into m^2 congruent triangles, m chosen so
+// that the element count is close to `target`; a face is a patch, its scene surface the physical surface.
+Shot make_shot(const std::string& scene_name, std::size_t target, const std::string& light_group) {
+  const Scene scene = load_scene(scene_name);
+  double total_area = 0.0;
+  for (const Face& f : scene.faces) total_area += area(f.vertices);
+  const double element_area = total_area / static_cast<double>(target);
+  Shot shot;
+  for (std::uint32_t fi = 0; fi < scene.faces.size(); ++fi) {
+    const Face& face = scene.faces[fi];
+    const Plane plane = scene.surfaces[face.surface].plane;
+    for (std::size_t k = 1; k + 1 < face.vertices.size(); ++k) {
+      const Vec3 a = face.vertices[0], b = face.vertices[k], c = face.vertices[k + 1];
+      const double tri_area = 0.5 * glm::length(glm::cross(b - a, c - a));
+      const int m = std::max(1, static_cast<int>(std::lround(std::sqrt(tri_area / element_area))));
+      const Vec3 u = (b - a) / double(m), v = (c - a) / double(m);
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; i + j < m; ++j) {
+          const Vec3 p = a + double(i) * u + double(j) * v;
+          const Vec3 up[3] = {p, p + u, p + v};
+          shot.receivers.add(up, plane, face.surface, fi);
+          if (i + j + 1 < m) {
+            const Vec3 down[3] = {p + u, p + u + v, p + v};
+            shot.receivers.add(down, plane, face.surface, fi);
+          }
+        }
+    }
+  }
+  const Group& light = scene.groups[*scene.find_group(light_group)];
+  const Face& lf = scene.faces[light.faces.front()];
+  shot.shooter = Shooter::from_normal(centroid(lf.vertices), scene.surfaces[lf.surface].plane.normal);
+  return shot;
+}
+
+const Shot& shot_for(int scene) {
+  static std::map<int, Shot> cache;
+  auto it = cache.find(scene);
+  if (it == cache.end())
+    it = cache.emplace(scene, scene == 0 ? make_shot("cornell", 4000, "light") : make_shot("office", 16000, "light_1")).first;
+  return it->second;
+}
+
+const char* scene_label(int scene) { return scene == 0 ? "cornell_4k" : "office_16k"; }
+
+void BM_Shot(benchmark::State& state, const char* backend_name) {
+  const Shot& shot = shot_for(static_cast<int>(state.range(0)));
+  const auto backend = make_backend(backend_name, {.resolution = static_cast<int>(state.range(1))});
+  std::vector<double> out(shot.receivers.size());
+  for (auto _ : state) {
+    backend->compute(shot.shooter, shot.receivers, {}, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetLabel(scene_label(static_cast<int>(state.range(0))));
+  state.counters["receivers"] = static_cast<double>(shot.receivers.size());
+  state.counters["shots/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void BM_Pair(benchmark::State& state) {
+  const Shot& shot = shot_for(static_cast<int>(state.range(0)));
+  const int n = static_cast<int>(state.range(1));
+  HemicubeBackend classical(n);
+  AaHemicubeBackend aa(n);
+  std::vector<double> out(shot.receivers.size());
+  double classical_s = 0.0, aa_s = 0.0;
+  using Clock = std::chrono::steady_clock;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    classical.compute(shot.shooter, shot.receivers, {}, out);
+    benchmark::DoNotOptimize(out.data());
+    const auto t1 = Clock::now();
+    aa.compute(shot.shooter, shot.receivers, {}, out);
+    benchmark::DoNotOptimize(out.data());
+    const auto t2 = Clock::now();
+    classical_s += std::chrono::duration<double>(t1 - t0).count();
+    aa_s += std::chrono::duration<double>(t2 - t1).count();
+  }
+  const double iterations = static_cast<double>(state.iterations());
+  state.SetLabel(scene_label(static_cast<int>(state.range(0))));
+  state.counters["receivers"] = static_cast<double>(shot.receivers.size());
+  state.counters["classical_ms"] = 1e3 * classical_s / iterations;
+  state.counters["aa_ms"] = 1e3 * aa_s / iterations;
+  state.counters["aa/classical"] = aa_s / classical_s;
+  state.counters["aa_entries"] = static_cast<double>(aa.last_entries());
+}
+
+void resolutions(benchmark::internal::Benchmark* b) {
+  for (int scene : {0, 1})
+    for (int n : {100, 300, 1000}) b->Args({scene, n});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+BENCHMARK(BM_Pair)->Apply(resolutions);
+BENCHMARK_CAPTURE(BM_Shot, classical, "hemicube")->Apply(resolutions);
+BENCHMARK_CAPTURE(BM_Shot, aa, "aa-hemicube")->Apply(resolutions);
+
+}  // namespace
+
+BENCHMARK_MAIN();

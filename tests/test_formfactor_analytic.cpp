@@ -1,0 +1,85 @@
+// The analytic back end (Baum, Rushmeier and Winget 1989, eq. 9) against Howell's closed forms
+// (references.md): B-3, the centred square, the off-axis disk, B-2, and a closed cube.
+#include "formfactor/analytic.h"
+#include "formfactor_fixtures.h"
+
+#include <gtest/gtest.h>
+
+namespace aarad::formfactor {
+namespace {
+
+using namespace testing;
+
+double analytic(const Shooter& s, const Polygon& p) {
+  ReceiverView view;
+  add(view, p, 0, 0);
+  std::vector<double> out(1, -1.0);
+  AnalyticBackend backend;
+  backend.compute(s, view, {}, out);
+  return out[0];
+}
+
+const Shooter kUp = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
+
+TEST(FormfactorAnalytic, HowellB3Corner) {
+  EXPECT_NEAR(howell_b3(1, 1, 1), 0.1385316060, 1e-10);
+  EXPECT_NEAR(analytic(kUp, rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0})), 0.1385316060, 1e-10);
+  EXPECT_NEAR(analytic(kUp, rectangle({0, 0, 1.5}, {0, 0.7, 0}, {2.0, 0, 0})), howell_b3(2.0, 0.7, 1.5), 1e-12);
+}
+
+TEST(FormfactorAnalytic, CentredSquare) {
+  EXPECT_NEAR(analytic(kUp, rectangle({-0.5, -0.5, 1}, {0, 1, 0}, {1, 0, 0})), 0.2394565, 5e-8);
+}
+
+TEST(FormfactorAnalytic, OffAxisDisk) {
+  EXPECT_NEAR(howell_disk(1, 1, 0.5), 0.4379826, 5e-8);
+  // An inscribed 4096-gon falls short of the disk by about (2 pi / m)^2 / 6 of its area.
+  EXPECT_NEAR(analytic(kUp, disk_facing_down(0.5, 0, 1, 1, 4096)), 0.4379826, 1e-6);
+}
+
+TEST(FormfactorAnalytic, PerpendicularRectangleHowellB2) {
+  // Rectangle in the plane x = 0.7, y in [0, 0.9], z in [0, 1.3], facing the point.
+  const Polygon p = rectangle({0.7, 0, 0}, {0, 0, 1.3}, {0, 0.9, 0});
+  EXPECT_NEAR(analytic(kUp, p), howell_b2(1.3, 0.9, 0.7), 1e-12);
+}
+
+TEST(FormfactorAnalytic, ClosedCubeSumsToOne) {
+  ReceiverView view;
+  add_box(view, Vec3(0), Vec3(1), 1);
+  for (const Vec3& n : {Vec3(0, 0, 1), glm::normalize(Vec3(0.3, -0.2, 1.0)), glm::normalize(Vec3(1, 1, 1))}) {
+    const Shooter s = Shooter::from_normal({0.3, 0.6, 0.45}, n);
+    std::vector<double> out(view.size(), 0.0);
+    AnalyticBackend().compute(s, view, {}, out);
+    double sum = 0.0;
+    for (double f : out) sum += f;
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+  }
+  // From the centre of the floor, the ceiling is C-11's point version: 4 B-3(0.5, 0.5, 1).
+  std::vector<double> out(view.size(), 0.0);
+  AnalyticBackend().compute(Shooter::from_normal({0.5, 0.5, 0}, {0, 0, 1}), view, {}, out);
+  EXPECT_NEAR(out[1], 4 * howell_b3(0.5, 0.5, 1), 1e-12);
+  EXPECT_EQ(out[0], 0.0);  // the floor itself is culled
+}
+
+TEST(FormfactorAnalytic, ClipsToTheFrontAndCullsBackFaces) {
+  // A wall crossing the shooter's plane: only its upper part counts (B-2 on that part).
+  const Polygon wall = rectangle({0.7, 0, -0.8}, {0, 0, 2.1}, {0, 0.9, 0});
+  EXPECT_NEAR(analytic(kUp, wall), howell_b2(1.3, 0.9, 0.7), 1e-12);
+  // Entirely behind: 0; facing away: 0.
+  EXPECT_EQ(analytic(kUp, rectangle({0, 0, -1}, {0, 1, 0}, {1, 0, 0})), 0.0);
+  EXPECT_EQ(analytic(kUp, rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0})), 0.0);
+}
+
+TEST(FormfactorAnalytic, SubsetLeavesOthersUntouched) {
+  ReceiverView view;
+  add(view, rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);
+  add(view, rectangle({-1, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 1);
+  std::vector<double> out = {-1.0, -1.0};
+  const std::vector<std::uint32_t> subset = {1};
+  AnalyticBackend().compute(kUp, view, subset, out);
+  EXPECT_EQ(out[0], -1.0);
+  EXPECT_NEAR(out[1], 0.1385316060, 1e-10);
+}
+
+}  // namespace
+}  // namespace aarad::formfactor

@@ -1,0 +1,199 @@
+// The per-pixel coverage lists of the AA hemicube (Chandran et al., section 3.2): the front-to-back walk
+// E_k = A_k (1 - f_{k-1}), the same-surface rule, the full-pixel rule, and the error bounds of sections
+// 3.2.5 and 3.2.6 on synthetic pixel lists.
+//
+// The paper's configurations, worked out (docs/form-factors.md):
+// - Pure underestimation (every patch visible): n patches side by side with A_i = 1/n fill the pixel; the walk
+//   gives f = 1 - prod(1 - A_i), so the error sum A_i - f = prod(1 - A_i) = (1 - 1/n)^n, the largest value of
+//   prod(1 - A_i) under sum A_i = 1 (AM-GM).
+// - Pure overestimation (every patch but the first hidden): patch 0 covers A_0; patches 1..n-1 lie entirely
+//   behind it, each covering at most A_0, so their true share is 0 and their estimated share is
+//   f - A_0 = (1 - A_0)(1 - prod_{i>0}(1 - A_i)), largest when every A_i = A_0: with x = 1 - A_0 the error is
+//   x - x^n, maximal at x = (1/n)^(1/(n-1)) with value (1/n)^(1/(n-1)) - (1/n)^(n/(n-1)) (the paper's maximum).
+//   The paper writes the maximiser as A_0 = 1 - (1/(n-1))^(1/(n-2)): that is the same expression with n - 1
+//   patches in place of n (an index shift; at n = 2 it is undefined). The tests check the value, the maximiser
+//   and the shift.
+#include "formfactor/coverage_list.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <vector>
+
+namespace aarad::formfactor {
+namespace {
+
+double total_visible(const std::vector<CoverageEntry>& list) {
+  double sum = 0.0;
+  resolve_front_to_back(list, [&](std::uint32_t, double e) { sum += e; });
+  return sum;
+}
+
+TEST(FormfactorCoverageList, FrontToBackRecurrence) {
+  const std::vector<CoverageEntry> list = {{1.0, 0.5, 0, 0}, {2.0, 0.4, 1, 1}, {3.0, 0.3, 2, 2}};
+  std::vector<double> e(3);
+  const double f = resolve_front_to_back(list, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.5);
+  EXPECT_DOUBLE_EQ(e[1], 0.4 * 0.5);
+  EXPECT_DOUBLE_EQ(e[2], 0.3 * (1 - 0.5) * (1 - 0.4));  // section 3.2.3: A_k prod_{i<k} (1 - A_i)
+  EXPECT_DOUBLE_EQ(f, 1 - 0.5 * 0.6 * 0.7);
+}
+
+TEST(FormfactorCoverageList, SameSurfacePiecesShareTheFractionInFront) {
+  // An occluder of 0.5 in front of two pieces of one surface that together fill the pixel.
+  const std::vector<CoverageEntry> list = {{1.0, 0.5, 0, 7}, {2.0, 0.25, 1, 3}, {2.0, 0.75, 2, 3}, {3.0, 0.9, 3, 4}};
+  std::vector<double> e(4);
+  const double f = resolve_front_to_back(list, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[1], 0.25 * 0.5);
+  EXPECT_DOUBLE_EQ(e[2], 0.75 * 0.5);  // not 0.75 * (1 - 0.5 - 0.125)
+  EXPECT_DOUBLE_EQ(e[3], 0.0);         // behind a full surface
+  EXPECT_DOUBLE_EQ(f, 1.0);
+}
+
+TEST(FormfactorCoverageList, PureUnderestimationReachesPaperBound) {
+  std::mt19937 rng(3);
+  for (int n = 2; n <= 50; ++n) {
+    std::vector<CoverageEntry> list;
+    for (int i = 0; i < n; ++i) list.push_back({1.0 + i, 1.0 / n, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
+    const double error = 1.0 - total_visible(list);  // every patch is visible: the truth is sum A_i = 1
+    EXPECT_NEAR(error, std::pow(1.0 - 1.0 / n, n), 1e-12) << n;
+    // No other split of the pixel among n visible patches does worse.
+    std::exponential_distribution<double> g;
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<double> a(n);
+      for (double& v : a) v = g(rng);
+      const double s = std::accumulate(a.begin(), a.end(), 0.0);
+      for (int i = 0; i < n; ++i) list[i].coverage = a[i] / s;
+      EXPECT_LE(1.0 - total_visible(list), std::pow(1.0 - 1.0 / n, n) + 1e-12);
+    }
+  }
+  EXPECT_NEAR(std::pow(1.0 - 1.0 / 1e6, 1e6), std::exp(-1.0), 1e-6);  // tends to 1/e
+}
+
+double overestimation(int n, double a0) {
+  // Patch 0 covers a0; patches 1..n-1 lie behind it inside its projection, each covering a0.
+  std::vector<CoverageEntry> list;
+  for (int i = 0; i < n; ++i) list.push_back({1.0 + i, a0, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
+  return total_visible(list) - a0;  // the truth is a0 (everything else is hidden)
+}
+
+TEST(FormfactorCoverageList, PureOverestimationReachesPaperMaximum) {
+  for (int n = 2; n <= 50; ++n) {
+    const double paper_max = std::pow(1.0 / n, 1.0 / (n - 1)) - std::pow(1.0 / n, double(n) / (n - 1));
+    const double a0 = 1.0 - std::pow(1.0 / n, 1.0 / (n - 1));
+    EXPECT_NEAR(overestimation(n, a0), paper_max, 1e-12) << n;
+    // It is the maximum over A_0.
+    for (int k = 0; k <= 1000; ++k) EXPECT_LE(overestimation(n, k / 1000.0), paper_max + 1e-15) << n << " " << k;
+    // The paper's A_0 = 1 - (1/(n-1))^(1/(n-2)), written for n + 1, is this maximiser.
+    const int m = n + 1;
+    EXPECT_NEAR(1.0 - std::pow(1.0 / (m - 1), 1.0 / (m - 2)), a0, 1e-15) << n;
+    // Occluded patches smaller than A_0 give less.
+    std::vector<CoverageEntry> list = {{1.0, a0, 0, 0}};
+    for (int i = 1; i < n; ++i) list.push_back({1.0 + i, 0.7 * a0, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
+    EXPECT_LT(total_visible(list) - a0, paper_max);
+  }
+}
+
+TEST(FormfactorCoverageList, ArenaSortsOnInsertionWhateverTheOrder) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<CoverageEntry> entries;
+    const int n = 1 + trial % 12;
+    for (int i = 0; i < n; ++i)
+      entries.push_back({u(rng) * 10, 0.3 * u(rng), static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
+    std::vector<CoverageEntry> sorted = entries;
+    std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.depth < b.depth; });
+    std::vector<double> expected(n, 0.0), got(n, 0.0);
+    resolve_front_to_back(sorted, [&](std::uint32_t r, double e) { expected[r] = e; });
+    std::shuffle(entries.begin(), entries.end(), rng);
+    CoverageArena arena;
+    arena.reset(3);
+    for (const CoverageEntry& e : entries) EXPECT_TRUE(arena.insert(1, e));
+    arena.resolve(1, [&](std::uint32_t r, double e) { got[r] = e; });
+    EXPECT_EQ(got, expected);
+    EXPECT_TRUE(arena.empty(0));
+    EXPECT_TRUE(arena.empty(2));
+  }
+}
+
+TEST(FormfactorCoverageList, ArenaGroupsPiecesOfOneSurface) {
+  CoverageArena arena;
+  arena.reset(1);
+  // Pieces of surface 5 at slightly different depths (rounding of their planes), another surface between.
+  arena.insert(0, {2.0, 0.2, 0, 5});
+  arena.insert(0, {2.5, 0.3, 1, 6});
+  arena.insert(0, {2.0 + 1e-15, 0.3, 2, 5});
+  arena.insert(0, {1.0, 0.1, 3, 7});
+  std::vector<std::uint32_t> order;
+  arena.for_each(0, [&](const CoverageEntry& e) { order.push_back(e.receiver); });
+  EXPECT_EQ(order, (std::vector<std::uint32_t>{3, 0, 2, 1}));
+  std::vector<double> e(4);
+  arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.2 * 0.9);
+  EXPECT_DOUBLE_EQ(e[2], 0.3 * 0.9);
+}
+
+TEST(FormfactorCoverageList, FullEntryTakesItsPlaceByDepth) {
+  CoverageArena arena;
+  arena.reset(2);
+  EXPECT_TRUE(arena.insert(1, {1.0, 0.25, 0, 0}));
+  EXPECT_TRUE(arena.insert(1, {3.0, 0.5, 1, 1}));
+  EXPECT_TRUE(arena.insert(1, {2.0, 1.0, 2, 2}));   // covers the pixel between the two
+  EXPECT_TRUE(arena.full(1));
+  EXPECT_FALSE(arena.insert(1, {2.5, 0.5, 3, 3}));  // behind it
+  EXPECT_FALSE(arena.insert(1, {4.0, 1.0, 4, 4}));  // a farther full entry
+  std::vector<double> e(5, -1.0);
+  const double f = arena.take(1, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_EQ(e, (std::vector<double>{0.25, -1.0, 0.75, -1.0, -1.0}));
+  EXPECT_DOUBLE_EQ(f, 1.0);
+  EXPECT_TRUE(arena.empty(1));  // taken
+  // Through the same walk as a sorted synthetic list.
+  const std::vector<CoverageEntry> sorted = {{1.0, 0.25, 0, 0}, {2.0, 1.0, 2, 2}, {3.0, 0.5, 1, 1}};
+  std::vector<double> s(3, -1.0);
+  resolve_front_to_back(sorted, [&](std::uint32_t r, double v) { s[r] = v; });
+  EXPECT_EQ(s, (std::vector<double>{0.25, 0.0, 0.75}));
+  EXPECT_EQ(arena.entries(), 5u);
+}
+
+TEST(FormfactorCoverageList, FullPixelTakesNothingBehind) {
+  CoverageArena arena;
+  arena.reset(1);
+  EXPECT_TRUE(arena.insert(0, {3.0, 0.5, 0, 1}));   // a surface behind
+  EXPECT_TRUE(arena.insert(0, {2.0, 0.6, 1, 2}));   // piece of surface 2
+  EXPECT_FALSE(arena.full(0));
+  EXPECT_TRUE(arena.insert(0, {2.0, 0.4, 2, 2}));   // surface 2 now covers the pixel: drops surface 1
+  EXPECT_TRUE(arena.full(0));
+  EXPECT_FALSE(arena.insert(0, {4.0, 0.9, 3, 3}));  // behind the full surface: refused
+  EXPECT_TRUE(arena.insert(0, {2.0, 1e-14, 4, 2})); // a crumb of the full surface itself joins it
+  EXPECT_TRUE(arena.insert(0, {1.0, 0.25, 5, 4}));  // in front: accepted, the pixel stays full
+  EXPECT_TRUE(arena.full(0));
+  std::vector<double> e(6, -1.0);
+  const double f = arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[5], 0.25);
+  EXPECT_DOUBLE_EQ(e[1], 0.6 * 0.75);
+  EXPECT_DOUBLE_EQ(e[2], 0.4 * 0.75);
+  EXPECT_EQ(e[0], -1.0);  // dropped
+  EXPECT_EQ(e[3], -1.0);  // refused
+  EXPECT_LE(f, 1.0);
+  EXPECT_NEAR(f, 1.0, 1e-15);
+  // A full entry (one receiver covering the pixel) in front hides the list behind it; partial entries behind
+  // it are refused.
+  EXPECT_TRUE(arena.insert(0, {0.5, 1.0, 6, 8}));
+  EXPECT_FALSE(arena.insert(0, {0.7, 0.3, 7, 9}));
+  std::vector<double> hidden(8, -1.0);
+  EXPECT_DOUBLE_EQ(arena.resolve(0, [&](std::uint32_t r, double v) { hidden[r] = v; }), 1.0);
+  EXPECT_DOUBLE_EQ(hidden[6], 1.0);
+  EXPECT_EQ(hidden[5], -1.0);
+  EXPECT_EQ(hidden[7], -1.0);
+  // Resetting keeps the pool but empties the lists.
+  arena.reset(1);
+  EXPECT_TRUE(arena.empty(0));
+  EXPECT_FALSE(arena.full(0));
+}
+
+}  // namespace
+}  // namespace aarad::formfactor
