@@ -57,13 +57,15 @@ int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
 
 }  // namespace
 
-AreaRasterizer::AreaRasterizer(int width, int height) : width_(width), height_(height), stride_(height + 1) {
+AreaRasterizer::AreaRasterizer(int width, int height)
+    : width_(width), height_(height), stride_(height + 1), mask_words_(height / 64 + 1) {
   if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
     throw Error("AreaRasterizer: viewport " + std::to_string(width) + " x " + std::to_string(height) +
                 " is out of range; use a width and height between 1 and " + std::to_string(kMaxSide));
   cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(stride_), Cell{});
   row_low_.assign(static_cast<std::size_t>(width), height + 1);
   row_high_.assign(static_cast<std::size_t>(width), -1);
+  touched_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(mask_words_), 0);
 }
 
 RasterResult AreaRasterizer::rasterize_into(std::span<const Vec2> polygon, std::span<double> image) {
@@ -224,12 +226,14 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
       yl = std::clamp(y0 + (xl - x0) * slope, y_min, y_max);
     }
     Cell* cells = column(x);
+    std::uint64_t* touched = touched_rows(x);
     if (ye == yl) {  // horizontal within the column: one pixel (row height only for y == height)
       const int row = static_cast<int>(ye);
       const double dx = sign * (xl - xe);
       const double h = ye - row;
       cells[row].area += dx * h;
       cells[row].carry += dx;
+      touch(touched, row);
       row_low_[x] = std::min(row_low_[x], row);
       row_high_[x] = std::max(row_high_[x], row);
     } else {
@@ -239,10 +243,11 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         double xa = xe, ya = ye;
         while (row + 1 < yl) {
           const double t = row + 1.0;
-          const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xa, xl);
+          const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
           const double dx = sign * (xc - xa);
           cells[row].area += 0.5 * dx * ((ya - row) + 1.0);
           cells[row].carry += dx;
+          touch(touched, row);
           xa = xc;
           ya = t;
           ++row;
@@ -250,6 +255,7 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         const double dx = sign * (xl - xa);
         cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
         cells[row].carry += dx;
+        touch(touched, row);
         row_high_[x] = std::max(row_high_[x], row);
       } else {
         int row = static_cast<int>(ye);
@@ -258,10 +264,11 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         double xa = xe, ya = ye;
         while (row > yl) {
           const double t = row;
-          const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xa, xl);
+          const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
           const double dx = sign * (xc - xa);
           cells[row].area += 0.5 * dx * ((ya - row) + 0.0);
           cells[row].carry += dx;
+          touch(touched, row);
           xa = xc;
           ya = t;
           --row;
@@ -269,6 +276,7 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         const double dx = sign * (xl - xa);
         cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
         cells[row].carry += dx;
+        touch(touched, row);
         row_low_[x] = std::min(row_low_[x], row);
       }
     }

@@ -18,6 +18,8 @@
 
 #include "core/math.h"
 
+#include <bit>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -76,43 +78,73 @@ class AreaRasterizer {
   void mark_bottom(double x0, double x1);
 
   Cell* column(int x) { return cells_.data() + static_cast<std::ptrdiff_t>(x) * stride_; }
+  std::uint64_t* touched_rows(int x) { return touched_.data() + static_cast<std::ptrdiff_t>(x) * mask_words_; }
+  static void touch(std::uint64_t* touched, int row) { touched[row >> 6] |= std::uint64_t{1} << (row & 63); }
+  // The highest row in [low, y] whose bit is set in `touched`, or low - 1.
+  static int next_touched_row(const std::uint64_t* touched, int y, int low);
 
   int width_, height_;
   int stride_;                      // height_ + 1 cells per column: row height_ holds the carry from above
   std::vector<Cell> cells_;         // column-major, all zero between calls
   std::vector<int> row_low_;        // per column: lowest touched row, height_ + 1 when untouched
   std::vector<int> row_high_;       // per column: highest touched row, -1 when untouched
+  int mask_words_;                  // 64-bit words per column in touched_
+  std::vector<std::uint64_t> touched_;  // per column, one bit per row (0 .. height_): cell written
   int column_begin_ = 0, column_end_ = 0;
 };
 
 // Phase 2 (carry adjustment), fused with the visit: for each touched column, run down from its highest
 // touched row adding the carries of the rows above (the prefix sum of Figure 4), report the pixel and
-// clear its cell for the next polygon.
+// clear its cell for the next polygon. Rows without a touched cell between two touched ones all have the
+// running carry as coverage (1 in the polygon's interior): they are reported without reading a cell,
+// jumping from touched row to touched row with the column's bit mask.
 template <class Visit>
 RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
   const RasterResult result = traverse_edges(polygon);
   for (int x = column_begin_; x < column_end_; ++x) {
     const int low = row_low_[x];
-    int y = row_high_[x];
+    const int high = row_high_[x];
     row_low_[x] = height_ + 1;
     row_high_[x] = -1;
-    if (y < low) continue;
+    if (high < low) continue;  // no cell written in this column
     Cell* cells = column(x);
+    std::uint64_t* touched = touched_rows(x);
     double carry = 0.0;
+    int y = high;
     if (y == height_) {  // the part of the polygon above the viewport covers the column below it
       carry = cells[y].carry;
       cells[y] = Cell{};
       --y;
     }
-    for (; y >= low; --y) {
-      const double coverage = cells[y].area + carry;
-      carry += cells[y].carry;
-      cells[y] = Cell{};
-      if (coverage > kCoverageFloor) visit(x, y, coverage < 1.0 ? coverage : 1.0);
+    while (y >= low) {
+      const int next = next_touched_row(touched, y, low);  // low - 1 when none is left
+      if (carry > kCoverageFloor) {
+        const double coverage = carry < 1.0 ? carry : 1.0;
+        for (int row = y; row > next; --row) visit(x, row, coverage);
+      }
+      if (next < low) break;
+      const double coverage = cells[next].area + carry;
+      carry += cells[next].carry;
+      cells[next] = Cell{};
+      if (coverage > kCoverageFloor) visit(x, next, coverage < 1.0 ? coverage : 1.0);
+      y = next - 1;
     }
+    for (int word = low >> 6; word <= high >> 6; ++word) touched[word] = 0;
   }
   column_begin_ = column_end_ = 0;
   return result;
+}
+
+inline int AreaRasterizer::next_touched_row(const std::uint64_t* touched, int y, int low) {
+  int word = y >> 6;
+  std::uint64_t bits = touched[word] & (~std::uint64_t{0} >> (63 - (y & 63)));
+  const int low_word = low >> 6;
+  while (bits == 0) {
+    if (--word < low_word) return low - 1;
+    bits = touched[word];
+  }
+  const int row = word * 64 + 63 - std::countl_zero(bits);
+  return row >= low ? row : low - 1;
 }
 
 }  // namespace aarad
