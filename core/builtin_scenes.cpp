@@ -279,7 +279,7 @@ Scene make_cornell_box() {
 Scene make_office() {
   Scene scene;
   scene.name = "office";
-  const std::uint32_t carpet = scene.add_material({"carpet", Rgb(0.30, 0.28, 0.25), Rgb(0.0)});
+  const std::uint32_t carpet = scene.add_material({"carpet", Rgb(0.45, 0.42, 0.38), Rgb(0.0)});
   const std::uint32_t ceiling = scene.add_material({"ceiling_white", Rgb(0.80, 0.80, 0.78), Rgb(0.0)});
   const std::uint32_t paint = scene.add_material({"wall_paint", Rgb(0.70, 0.68, 0.62), Rgb(0.0)});
   const std::uint32_t lamp = scene.add_material({"lamp", Rgb(0.78), Rgb(12.0, 11.5, 10.0)});

@@ -66,8 +66,9 @@ class Scene {
   std::optional<Camera> camera;
   std::vector<std::string> warnings;  // what import fixed or skipped, each naming file and line
 
-  // Adds a face to group `group` (created on first use) with material index `material`. The face's
-  // surface is assigned by build_surfaces().
+  // add_group returns the index of the group named `group_name`, creating it on first use; add_face adds
+  // a face to group index `group` with material index `material`. The face's surface is assigned by
+  // build_surfaces().
   std::uint32_t add_group(const std::string& group_name);
   std::uint32_t add_material(const Material& material);
   void add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line = 0);
