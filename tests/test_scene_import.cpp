@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -349,6 +350,26 @@ TEST(SceneModel, scene_build_surfaces_tolerance_is_relative_to_scene_size) {
     scene.add_face(g, m, {{0, 0, size}, {0, 0.001, size}, {0.001, 0, size}});  // sets the scene's size
     scene.build_surfaces();
     EXPECT_EQ(scene.groups[g].surfaces.size(), size == 1.0 ? 3u : 2u) << size;
+  }
+}
+
+TEST(SceneModel, scene_fitted_camera_sees_the_whole_bounds) {
+  const Scene scene = make_furnace();
+  for (const double aspect : {0.5, 1.0, 2.0}) {
+    const Camera c = scene.fitted_camera(aspect);
+    EXPECT_NEAR(glm::length(c.forward), 1.0, 1e-12);
+    EXPECT_NEAR(glm::dot(c.forward, c.up), 0.0, 1e-12);
+    const Vec3 right = glm::cross(c.forward, c.up);
+    const double tan_v = std::tan(0.5 * c.vertical_fov), tan_h = aspect * tan_v;
+    const Vec3 lo = scene.bounds_min(), hi = scene.bounds_max();
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y, (corner & 4) ? hi.z : lo.z);
+      const Vec3 d = p - c.eye;
+      const double depth = glm::dot(d, c.forward);
+      ASSERT_GT(depth, 0.0);
+      EXPECT_LE(std::abs(glm::dot(d, c.up)) / depth, tan_v * (1 + 1e-12)) << aspect;
+      EXPECT_LE(std::abs(glm::dot(d, right)) / depth, tan_h * (1 + 1e-12)) << aspect;
+    }
   }
 }
 
