@@ -58,14 +58,15 @@ int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
 }  // namespace
 
 AreaRasterizer::AreaRasterizer(int width, int height)
-    : width_(width), height_(height), stride_(height + 1), mask_words_(height / 64 + 1) {
+    : width_(width), height_(height) {
   if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
     throw Error("AreaRasterizer: viewport " + std::to_string(width) + " x " + std::to_string(height) +
                 " is out of range; use a width and height between 1 and " + std::to_string(kMaxSide));
-  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(stride_), Cell{});
-  row_low_.assign(static_cast<std::size_t>(width), height + 1);
+  // Sized for a polygon covering the whole viewport; each polygon packs its bounding box at the start.
+  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 1), Cell{});
+  row_low_.assign(static_cast<std::size_t>(width), kNoRow);
   row_high_.assign(static_cast<std::size_t>(width), -1);
-  touched_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(mask_words_), 0);
+  touched_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height / 64 + 1), 0);
 }
 
 RasterResult AreaRasterizer::rasterize_into(std::span<const Vec2> polygon, std::span<double> image) {
@@ -98,6 +99,13 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
   if (max_x <= 0.0 || min_x >= width_ || max_y <= 0.0 || min_y >= height_) return result;  // wholly outside
   column_begin_ = static_cast<int>(std::max(min_x, 0.0));
   column_end_ = static_cast<int>(std::ceil(std::min(max_x, static_cast<double>(width_))));
+  // The box's rows, up to the row of max_y (height_ when the polygon reaches above the viewport: that row
+  // holds the carry from above), packed column by column at the start of the scratch buffers so a small
+  // polygon touches few cache lines.
+  row_begin_ = static_cast<int>(std::max(min_y, 0.0));
+  const int row_top = static_cast<int>(std::ceil(std::min(max_y, static_cast<double>(height_))));
+  stride_ = row_top - row_begin_ + 1;
+  mask_words_ = (stride_ - 1) / 64 + 1;
 
   const double winding_sign = orientation > 0 ? 1.0 : -1.0;
   for (std::size_t i = 0; i < n; ++i) add_edge(polygon[i], polygon[i + 1 == n ? 0 : i + 1], winding_sign);
@@ -107,7 +115,7 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
 // Columns [x0, x1) of an edge part below the viewport: it adds nothing, but the pixels above it down to
 // row 0 may be covered by the carry of the edges above, so those columns are scanned down to row 0.
 void AreaRasterizer::mark_bottom(double x0, double x1) {
-  for (int x = static_cast<int>(x0); x < x1; ++x) row_low_[x] = 0;
+  for (int x = static_cast<int>(x0); x < x1; ++x) row_low_[x - column_begin_] = 0;  // row 0 is row_begin_
 }
 
 // An edge part above the viewport: for the pixels of the viewport it is the horizontal line y = height
@@ -116,9 +124,10 @@ void AreaRasterizer::mark_bottom(double x0, double x1) {
 void AreaRasterizer::add_top_carry(double x0, double x1, double sign) {
   for (int x = static_cast<int>(x0); x < x1; ++x) {
     const double width = std::min(x1, x + 1.0) - std::max(x0, static_cast<double>(x));
-    column(x)[height_].carry += sign * width;
-    row_high_[x] = height_;
-    row_low_[x] = std::min(row_low_[x], height_);
+    const int top = height_ - row_begin_, column_index = x - column_begin_;
+    column(x)[top].carry += sign * width;
+    row_high_[column_index] = top;
+    row_low_[column_index] = std::min(row_low_[column_index], top);
   }
 }
 
@@ -225,59 +234,63 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
       xl = x + 1.0;
       yl = std::clamp(y0 + (xl - x0) * slope, y_min, y_max);
     }
+    // cells and touched are indexed by the row minus row_begin_; low and high are such rows too.
     Cell* cells = column(x);
     std::uint64_t* touched = touched_rows(x);
+    int& low = row_low_[x - column_begin_];
+    int& high = row_high_[x - column_begin_];
+    const int rb = row_begin_;
     if (ye == yl) {  // horizontal within the column: one pixel (row height only for y == height)
       const int row = static_cast<int>(ye);
       const double dx = sign * (xl - xe);
       const double h = ye - row;
-      cells[row].area += dx * h;
-      cells[row].carry += dx;
-      touch(touched, row);
-      row_low_[x] = std::min(row_low_[x], row);
-      row_high_[x] = std::max(row_high_[x], row);
+      cells[row - rb].area += dx * h;
+      cells[row - rb].carry += dx;
+      touch(touched, row - rb);
+      low = std::min(low, row - rb);
+      high = std::max(high, row - rb);
     } else {
       if (ye < yl) {
         int row = static_cast<int>(ye);
-        row_low_[x] = std::min(row_low_[x], row);
+        low = std::min(low, row - rb);
         double xa = xe, ya = ye;
         while (row + 1 < yl) {
           const double t = row + 1.0;
           const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
           const double dx = sign * (xc - xa);
-          cells[row].area += 0.5 * dx * ((ya - row) + 1.0);
-          cells[row].carry += dx;
-          touch(touched, row);
+          cells[row - rb].area += 0.5 * dx * ((ya - row) + 1.0);
+          cells[row - rb].carry += dx;
+          touch(touched, row - rb);
           xa = xc;
           ya = t;
           ++row;
         }
         const double dx = sign * (xl - xa);
-        cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
-        cells[row].carry += dx;
-        touch(touched, row);
-        row_high_[x] = std::max(row_high_[x], row);
+        cells[row - rb].area += 0.5 * dx * ((ya - row) + (yl - row));
+        cells[row - rb].carry += dx;
+        touch(touched, row - rb);
+        high = std::max(high, row - rb);
       } else {
         int row = static_cast<int>(ye);
         if (row == ye) --row;  // entering exactly on a row line from above
-        row_high_[x] = std::max(row_high_[x], row);
+        high = std::max(high, row - rb);
         double xa = xe, ya = ye;
         while (row > yl) {
           const double t = row;
           const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
           const double dx = sign * (xc - xa);
-          cells[row].area += 0.5 * dx * ((ya - row) + 0.0);
-          cells[row].carry += dx;
-          touch(touched, row);
+          cells[row - rb].area += 0.5 * dx * ((ya - row) + 0.0);
+          cells[row - rb].carry += dx;
+          touch(touched, row - rb);
           xa = xc;
           ya = t;
           --row;
         }
         const double dx = sign * (xl - xa);
-        cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
-        cells[row].carry += dx;
-        touch(touched, row);
-        row_low_[x] = std::min(row_low_[x], row);
+        cells[row - rb].area += 0.5 * dx * ((ya - row) + (yl - row));
+        cells[row - rb].carry += dx;
+        touch(touched, row - rb);
+        low = std::min(low, row - rb);
       }
     }
     if (x >= last_column) break;

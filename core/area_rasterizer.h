@@ -77,20 +77,25 @@ class AreaRasterizer {
   void add_top_carry(double x0, double x1, double sign);
   void mark_bottom(double x0, double x1);
 
-  Cell* column(int x) { return cells_.data() + static_cast<std::ptrdiff_t>(x) * stride_; }
-  std::uint64_t* touched_rows(int x) { return touched_.data() + static_cast<std::ptrdiff_t>(x) * mask_words_; }
+  Cell* column(int x) { return cells_.data() + static_cast<std::ptrdiff_t>(x - column_begin_) * stride_; }
+  std::uint64_t* touched_rows(int x) {
+    return touched_.data() + static_cast<std::ptrdiff_t>(x - column_begin_) * mask_words_;
+  }
   static void touch(std::uint64_t* touched, int row) { touched[row >> 6] |= std::uint64_t{1} << (row & 63); }
   // The highest row in [low, y] whose bit is set in `touched`, or low - 1.
   static int next_touched_row(const std::uint64_t* touched, int y, int low);
 
+  static constexpr int kNoRow = 1 << 30;
+
   int width_, height_;
-  int stride_;                      // height_ + 1 cells per column: row height_ holds the carry from above
-  std::vector<Cell> cells_;         // column-major, all zero between calls
-  std::vector<int> row_low_;        // per column: lowest touched row, height_ + 1 when untouched
-  std::vector<int> row_high_;       // per column: highest touched row, -1 when untouched
-  int mask_words_;                  // 64-bit words per column in touched_
-  std::vector<std::uint64_t> touched_;  // per column, one bit per row (0 .. height_): cell written
-  int column_begin_ = 0, column_end_ = 0;
+  // The current polygon's clipped bounding box: columns [column_begin_, column_end_), rows from
+  // row_begin_, stride_ rows per column (the last one is row height_, the carry from above, when the
+  // polygon reaches above the viewport). Scratch rows are numbered from row_begin_.
+  int column_begin_ = 0, column_end_ = 0, row_begin_ = 0, stride_ = 1, mask_words_ = 1;
+  std::vector<Cell> cells_;             // column-major over the box, all zero between calls
+  std::vector<int> row_low_;            // per box column: lowest touched row, kNoRow when untouched
+  std::vector<int> row_high_;           // per box column: highest touched row, -1 when untouched
+  std::vector<std::uint64_t> touched_;  // per box column, one bit per row: cell written
 };
 
 // Phase 2 (carry adjustment), fused with the visit: for each touched column, run down from its highest
@@ -102,16 +107,16 @@ template <class Visit>
 RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
   const RasterResult result = traverse_edges(polygon);
   for (int x = column_begin_; x < column_end_; ++x) {
-    const int low = row_low_[x];
-    const int high = row_high_[x];
-    row_low_[x] = height_ + 1;
-    row_high_[x] = -1;
+    const int low = row_low_[x - column_begin_];  // rows counted from row_begin_
+    const int high = row_high_[x - column_begin_];
+    row_low_[x - column_begin_] = kNoRow;
+    row_high_[x - column_begin_] = -1;
     if (high < low) continue;  // no cell written in this column
     Cell* cells = column(x);
     std::uint64_t* touched = touched_rows(x);
     double carry = 0.0;
     int y = high;
-    if (y == height_) {  // the part of the polygon above the viewport covers the column below it
+    if (y == height_ - row_begin_) {  // the part of the polygon above the viewport covers the column below it
       carry = cells[y].carry;
       cells[y] = Cell{};
       --y;
@@ -120,13 +125,13 @@ RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& vi
       const int next = next_touched_row(touched, y, low);  // low - 1 when none is left
       if (carry > kCoverageFloor) {
         const double coverage = carry < 1.0 ? carry : 1.0;
-        for (int row = y; row > next; --row) visit(x, row, coverage);
+        for (int row = y; row > next; --row) visit(x, row + row_begin_, coverage);
       }
       if (next < low) break;
       const double coverage = cells[next].area + carry;
       carry += cells[next].carry;
       cells[next] = Cell{};
-      if (coverage > kCoverageFloor) visit(x, next, coverage < 1.0 ? coverage : 1.0);
+      if (coverage > kCoverageFloor) visit(x, next + row_begin_, coverage < 1.0 ? coverage : 1.0);
       y = next - 1;
     }
     for (int word = low >> 6; word <= high >> 6; ++word) touched[word] = 0;
