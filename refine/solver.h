@@ -116,6 +116,7 @@ class Solver {
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
   void substructure(mesh::NodeId shooter, const Rgb& shot_flux, const std::vector<mesh::NodeId>& touched);
   double largest_reflected_luminance() const;
+  void update_adjacency();
 
   const Scene& scene_;
   SolverOptions options_;
@@ -128,6 +129,10 @@ class Solver {
   std::vector<double> ff_sample_;  // per receiver: one sample point's factors
   std::vector<Rgb> incident_;      // per NodeId: flux the node received in the current shot (leaves)
   std::vector<std::uint32_t> subset_;
+  // Edge-neighbours of every leaf (by receiver index, CSR), valid for hierarchy revision adjacency_revision_.
+  std::vector<std::uint32_t> neighbour_offsets_;
+  std::vector<mesh::NodeId> neighbours_;
+  std::uint64_t adjacency_revision_ = ~std::uint64_t{0};
 
   Rgb emitted_flux_{};
   Rgb absorbed_flux_{};
