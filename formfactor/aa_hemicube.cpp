@@ -8,7 +8,18 @@
 
 namespace aarad::formfactor {
 
-AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {}
+AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {
+  for (int f = 0; f < kHemicubeFaces; ++f) {
+    const auto face = static_cast<HemicubeFace>(f);
+    const int width = geometry_.width(face), height = geometry_.height(face);
+    const std::span<const double> weight = geometry_.coverage_weight(face);
+    std::vector<double>& column = column_weight_[static_cast<std::size_t>(f)];
+    column.resize(weight.size());
+    for (int x = 0; x < width; ++x)
+      for (int y = 0; y < height; ++y)
+        column[static_cast<std::size_t>(x) * height + y] = weight[static_cast<std::size_t>(y) * width + x];
+  }
+}
 
 std::size_t AaHemicubeBackend::last_entries() const {
   std::size_t sum = 0;
@@ -66,15 +77,10 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
   }
   face_entries_[static_cast<std::size_t>(face)] = arena.entries();
   // Walk every list front to back, in the arena's column-major order.
-  const std::span<const double> weight = geometry_.coverage_weight(face);
-  for (int x = 0; x < width; ++x) {
-    const std::size_t column = static_cast<std::size_t>(x) * height;
-    for (int y = 0; y < height; ++y) {
-      arena.prefetch(column + y + 8);
-      const double w = weight[static_cast<std::size_t>(y) * width + x];
-      arena.take(column + y, [&](std::uint32_t receiver, double visible) { sums[receiver] += visible * w; });
-    }
-  }
+  const std::vector<double>& weight = column_weight_[static_cast<std::size_t>(face)];
+  arena.take_all([&](std::size_t pixel, std::uint32_t receiver, double visible) {
+    sums[receiver] += visible * weight[pixel];
+  });
 }
 
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,

@@ -54,6 +54,8 @@ class AaHemicubeBackend final : public FormFactorBackend {
                   std::vector<double>& sums);
 
   HemicubeGeometry geometry_;
+  // Coverage weights of every face in the arena's column-major order (pixel (x, y) at x * height + y).
+  std::array<std::vector<double>, kHemicubeFaces> column_weight_;
   PreparedReceivers prepared_;
   std::array<std::vector<double>, kHemicubeFaces> face_sums_;
   std::array<std::size_t, kHemicubeFaces> face_entries_{};

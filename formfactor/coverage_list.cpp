@@ -1,67 +1,86 @@
 // Per-pixel coverage lists of the anti-aliased hemicube (Chandran, Kiran, Phani and Rai, section 3.2.1):
-// insertion sort into pooled linked lists. See coverage_list.h for the rules and the layout.
+// insertion sort into small pooled arrays. See coverage_list.h for the rules and the layout.
 #include "formfactor/coverage_list.h"
+
+#include <algorithm>
 
 namespace aarad::formfactor {
 
 void CoverageArena::reset(std::size_t pixels) {
-  if (live_ != 0) std::fill(slots_.begin(), slots_.end(), Slot{});
-  if (slots_.size() < pixels) slots_.resize(pixels);
-  nodes_.clear();
-  live_ = 0;
+  if (!clean_) {
+    std::fill(depth_.begin(), depth_.end(), kFar);
+    std::fill(list_.begin(), list_.end(), kNil);
+  }
+  if (depth_.size() < pixels) {
+    depth_.resize(pixels, kFar);
+    receiver_.resize(pixels, 0);
+    list_.resize(pixels, kNil);
+  }
+  pixels_ = pixels;
+  used_ = 0;
   entries_ = 0;
+  clean_ = false;
 }
 
-bool CoverageArena::insert_partial(Slot& slot, const CoverageEntry& entry) {
-  ++entries_;
-  if (!(entry.depth < slot.depth)) return false;  // behind the nearest full entry
-  const bool was_empty = slot.receiver == kNone && slot.head == kNil;
-  std::uint32_t prev = kNil, cur = slot.head & kIndexMask, before = kNil;
+std::uint32_t CoverageArena::allocate(std::uint32_t capacity) {
+  const std::size_t needed = used_ + 1 + capacity;
+  if (needed > pool_.size()) pool_.resize(std::max<std::size_t>(needed, 2 * pool_.size()));
+  const auto list = static_cast<std::uint32_t>(used_);
+  used_ = needed;
+  return list;
+}
+
+bool CoverageArena::insert_partial(std::size_t pixel, const CoverageEntry& entry) {
+  std::uint32_t& list = list_[pixel];
+  if (list == kNil) {
+    list = allocate(kFirstCapacity);
+    pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0}};
+    pool_[list + 1].entry = entry;
+    return true;
+  }
+  Cell* cells = &pool_[list];
+  const std::uint32_t count = cells[0].header.count;
+  // Find the group of the entry's surface, else the depth position (decided at group heads only, so groups
+  // stay contiguous).
+  std::uint32_t position = count + 1, group_end = 0;
   std::uint32_t prev_surface = kNoSurface;
-  bool placed = false;
-  auto link = [&](std::uint32_t after) {
-    const auto added = static_cast<std::uint32_t>(nodes_.size());
-    const std::uint32_t next = after == kNil ? (slot.head & kIndexMask) : nodes_[after].next;
-    nodes_.push_back(Node{entry.depth, entry.coverage, entry.receiver, entry.surface, next});
-    if (after == kNil) {
-      slot.head = (slot.head & kFullBit) | added;
-    } else {
-      nodes_[after].next = added;
+  double group_sum = entry.coverage;
+  for (std::uint32_t k = 1; k <= count; ++k) {
+    const CoverageEntry& e = cells[k].entry;
+    if (e.surface == entry.surface) {
+      group_end = k;
+      group_sum += e.coverage;
+    } else if (group_end != 0) {
+      break;  // past the group
+    } else if (position > count && e.surface != prev_surface && e.depth > entry.depth) {
+      position = k;
     }
-    return added;
-  };
-  while (cur != kNil) {
-    const Node& node = nodes_[cur];
-    if (node.surface == entry.surface) {
-      // Join the group of this surface: append after its last node.
-      double sum = entry.coverage;
-      std::uint32_t last = cur;
-      for (std::uint32_t m = cur; m != kNil && nodes_[m].surface == entry.surface; m = nodes_[m].next) {
-        sum += nodes_[m].coverage;
-        last = m;
-      }
-      const std::uint32_t added = link(last);
-      if (sum >= kFullCoverage) {
-        nodes_[added].next = kNil;  // everything behind a covering group is hidden
-        slot.head |= kFullBit;
-      }
-      return true;
-    }
-    // Depth order is decided at group heads only, so groups stay contiguous.
-    if (!placed && node.surface != prev_surface && node.depth > entry.depth) {
-      placed = true;
-      before = prev;
-    }
-    prev_surface = node.surface;
-    prev = cur;
-    cur = node.next;
+    prev_surface = e.surface;
   }
-  if (!placed) {
-    if ((slot.head & kFullBit) != 0) return false;  // behind the covering group
-    before = prev;
+  if (group_end != 0) {
+    position = group_end + 1;  // join the group, after its last piece
+  } else if (position > count && cells[0].header.full != 0) {
+    return false;  // behind the covering group
   }
-  if (was_empty) ++live_;
-  link(before);
+  if (count == cells[0].header.capacity) {
+    // Move the list to a block twice as large at the end of the pool.
+    const std::uint32_t capacity = 2 * count;
+    const std::uint32_t moved = allocate(capacity);
+    cells = &pool_[list];
+    std::copy(cells, cells + 1 + count, &pool_[moved]);
+    pool_[moved].header.capacity = capacity;
+    list = moved;
+    cells = &pool_[moved];
+  }
+  // Insertion sort: shift the entries behind one place back.
+  for (std::uint32_t k = count; k >= position; --k) cells[k + 1] = cells[k];
+  cells[position].entry = entry;
+  std::uint32_t new_count = count + 1;
+  if (group_end != 0 && group_sum >= kFullCoverage) {
+    new_count = position;  // everything behind a covering group is hidden
+    cells[0].header.full = 1;
+  }
+  cells[0].header.count = new_count;
   return true;
 }
 

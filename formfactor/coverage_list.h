@@ -79,115 +79,123 @@ double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&
 //
 // Layout. An entry that covers its whole pixel (A >= kFullCoverage: the interior pixels of a receiver, most of
 // the entries at high resolution) hides everything behind it, so only the nearest one matters: every pixel keeps
-// it inline, as a z-buffer would (16-byte slot: depth, receiver, list head). Partially covering entries go into
-// the pixel's sorted list: nodes of one pool with next indices. The walk merges the two: the inline entry takes
-// its place by depth, and everything behind it gets E = 0. A partial entry behind the inline one is refused at
-// insertion; list entries that a nearer full entry hides later are skipped by the walk. Slots are cleared as
-// take() reads them, so starting a face costs nothing.
+// it inline, as a z-buffer would (per-pixel arrays of depth, receiver and list: inserting a full entry touches
+// the same 12 bytes per pixel as the classical hemicube's z-buffer and item buffer). Partially covering entries go into the
+// pixel's sorted list: a small contiguous array in one pool (capacity 2, doubled by moving when full), kept
+// sorted by insertion sort, so a list is one or two cache lines whatever order receivers arrive in. The walk
+// merges the two: the inline entry takes its place by depth, and everything behind it gets E = 0. A partial
+// entry behind the inline one is refused at insertion; list entries that a nearer full entry hides later are
+// skipped by the walk. Slots are cleared as take() reads them, so starting a face costs nothing.
 class CoverageArena {
  public:
-  // Makes room for `pixels` pixels; every list must be empty (all taken) or the slots are cleared.
+  // Empties every list (O(1) after take_all) and makes room for `pixels` pixels; keeps all memory.
   void reset(std::size_t pixels);
 
   // Inserts an entry into the list of `pixel` at its depth (behind entries at the same depth), or into the
   // group of its surface when the list has one. Returns false when the pixel is full in front of it.
   bool insert(std::size_t pixel, const CoverageEntry& entry) {
-    Slot& slot = slots_[pixel];
+    ++entries_;
+    if (!(entry.depth < depth_[pixel])) return false;  // behind the nearest full entry
     if (entry.coverage >= kFullCoverage) {
-      if (slot.receiver == kNone && slot.head == kNil) ++live_;
-      ++entries_;
-      if (!(entry.depth < slot.depth)) return false;  // behind the inline entry
-      slot.depth = entry.depth;
-      slot.receiver = entry.receiver;
+      depth_[pixel] = entry.depth;
+      receiver_[pixel] = entry.receiver;
       return true;
     }
-    return insert_partial(slot, entry);
+    return insert_partial(pixel, entry);
   }
 
   // Walks the list of `pixel` front to back, calling emit(receiver, E); returns the final f.
   template <class Emit>
   double resolve(std::size_t pixel, Emit&& emit) const {
-    const Slot& slot = slots_[pixel];
     CoverageWalk walk;
-    std::uint32_t prev_surface = kNoSurface;
-    for (std::uint32_t n = slot.head & kIndexMask; n != kNil; n = nodes_[n].next) {
-      const Node& node = nodes_[n];
-      if (node.surface != prev_surface && !(node.depth < slot.depth)) break;  // a group behind the full entry
-      prev_surface = node.surface;
-      emit(node.receiver, walk.visible(node.surface, node.coverage));
-    }
-    if (slot.receiver != kNone) emit(slot.receiver, walk.visible(kNoSurface, 1.0));
+    visit_entries(pixel, [&](const CoverageEntry& e) { emit(e.receiver, walk.visible(e.surface, e.coverage)); });
     return walk.covered();
   }
 
-  // resolve(), then empties the pixel.
+  // Walks every pixel's list in pixel order, calling emit(pixel, receiver, E), and empties the arena (so the
+  // next reset() has nothing to clear).
   template <class Emit>
-  double take(std::size_t pixel, Emit&& emit) {
-    Slot& slot = slots_[pixel];
-    if (slot.receiver == kNone && slot.head == kNil) return 0.0;
-    const double f = resolve(pixel, emit);
-    slot = Slot{};
-    --live_;
-    return f;
+  void take_all(Emit&& emit) {
+    const std::size_t pixels = pixels_;
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const std::uint32_t list = list_[p];
+      const double full_depth = depth_[p];
+      if (list == kNil) {
+        if (full_depth != kFar) {
+          emit(p, receiver_[p], 1.0);  // a lone full entry: E = 1
+          depth_[p] = kFar;
+        }
+        continue;
+      }
+      if (p + 16 < pixels && list_[p + 16] != kNil) __builtin_prefetch(&pool_[list_[p + 16]]);
+      CoverageWalk walk;
+      visit_entries(p, [&](const CoverageEntry& e) { emit(p, e.receiver, walk.visible(e.surface, e.coverage)); });
+      depth_[p] = kFar;
+      list_[p] = kNil;
+    }
+    clean_ = true;
   }
 
   // Calls visit(const CoverageEntry&) for the entries of `pixel` that the walk reaches, front to back (the
   // inline full entry with surface kNoSurface).
   template <class Visit>
   void for_each(std::size_t pixel, Visit&& visit) const {
-    resolve_entries(pixel, visit);
+    visit_entries(pixel, visit);
   }
 
-  // Hints the memory of the list of `pixel` into the cache (a walk in pixel order reads pool nodes that were
-  // allocated in receiver order).
-  void prefetch(std::size_t pixel) const {
-    if (pixel >= slots_.size()) return;
-    const std::uint32_t n = slots_[pixel].head & kIndexMask;
-    if (n != kNil) __builtin_prefetch(&nodes_[n]);
-  }
-
-  bool empty(std::size_t pixel) const { return slots_[pixel].receiver == kNone && slots_[pixel].head == kNil; }
+  bool empty(std::size_t pixel) const { return depth_[pixel] == kFar && list_[pixel] == kNil; }
   // Whether the pixel is covered: by a full entry, or by a group of the list.
   bool full(std::size_t pixel) const {
-    return slots_[pixel].receiver != kNone || (slots_[pixel].head & kFullBit) != 0;
+    return depth_[pixel] != kFar || (list_[pixel] != kNil && header(list_[pixel]).full != 0);
   }
   // Entries offered since the last reset (accepted or not).
   std::size_t entries() const { return entries_; }
 
  private:
-  static constexpr std::uint32_t kNil = 0x7FFFFFFFu;
-  static constexpr std::uint32_t kFullBit = 0x80000000u;  // in Slot::head: the list's last group covers
-  static constexpr std::uint32_t kIndexMask = 0x7FFFFFFFu;
-  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
-  struct Slot {
-    double depth = std::numeric_limits<double>::infinity();  // of the nearest full entry
-    std::uint32_t receiver = kNone;                           // the nearest full entry
-    std::uint32_t head = kNil;                                // partial list, plus kFullBit
+  static constexpr std::uint32_t kNil = 0xFFFFFFFFu;
+  static constexpr std::uint32_t kFirstCapacity = 2;
+  static constexpr double kFar = std::numeric_limits<double>::infinity();
+  // A list is a header followed by `capacity` entries in the pool.
+  struct Header {
+    std::uint32_t count;
+    std::uint32_t capacity;
+    std::uint32_t full;  // 1 when the list's last group covers the pixel
+    std::uint32_t unused[3];
   };
-  struct Node {
-    double depth;
-    double coverage;
-    std::uint32_t receiver;
-    std::uint32_t surface;
-    std::uint32_t next;
+  union Cell {
+    CoverageEntry entry;
+    Header header;
+    Cell() : header{0, 0, 0, {0, 0, 0}} {}
   };
-  bool insert_partial(Slot& slot, const CoverageEntry& entry);
+  static_assert(sizeof(Header) == sizeof(CoverageEntry));
+  const Header& header(std::uint32_t list) const { return pool_[list].header; }
+  bool insert_partial(std::size_t pixel, const CoverageEntry& entry);
+  std::uint32_t allocate(std::uint32_t capacity);  // a list block: header + capacity entries
+
   template <class Visit>
-  void resolve_entries(std::size_t pixel, Visit& visit) const {
-    const Slot& slot = slots_[pixel];
-    std::uint32_t prev_surface = kNoSurface;
-    for (std::uint32_t n = slot.head & kIndexMask; n != kNil; n = nodes_[n].next) {
-      const Node& node = nodes_[n];
-      if (node.surface != prev_surface && !(node.depth < slot.depth)) break;
-      prev_surface = node.surface;
-      visit(CoverageEntry{node.depth, node.coverage, node.receiver, node.surface});
+  void visit_entries(std::size_t pixel, Visit&& visit) const {
+    const double full_depth = depth_[pixel];
+    if (list_[pixel] != kNil) {
+      const Cell* cells = &pool_[list_[pixel]];
+      const std::uint32_t count = cells[0].header.count;
+      std::uint32_t prev_surface = kNoSurface;
+      for (std::uint32_t k = 1; k <= count; ++k) {
+        const CoverageEntry& e = cells[k].entry;
+        if (e.surface != prev_surface && !(e.depth < full_depth)) break;  // a group behind the full entry
+        prev_surface = e.surface;
+        visit(e);
+      }
     }
-    if (slot.receiver != kNone) visit(CoverageEntry{slot.depth, 1.0, slot.receiver, kNoSurface});
+    if (full_depth != kFar) visit(CoverageEntry{full_depth, 1.0, receiver_[pixel], kNoSurface});
   }
 
-  std::vector<Slot> slots_;
-  std::vector<Node> nodes_;
-  std::size_t live_ = 0;  // pixels not empty
+  std::vector<double> depth_;           // per pixel: depth of the nearest full entry, kFar when none
+  std::vector<std::uint32_t> receiver_;  // per pixel: the nearest full entry
+  std::vector<std::uint32_t> list_;      // per pixel: pool index of the partial list's header, or kNil
+  std::vector<Cell> pool_;  // lists; pool_[0, used_) in use
+  std::size_t used_ = 0;
+  std::size_t pixels_ = 0;
+  bool clean_ = true;  // every pixel empty
   std::size_t entries_ = 0;
 };
 

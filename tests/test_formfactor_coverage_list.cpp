@@ -147,9 +147,15 @@ TEST(FormfactorCoverageList, FullEntryTakesItsPlaceByDepth) {
   EXPECT_FALSE(arena.insert(1, {2.5, 0.5, 3, 3}));  // behind it
   EXPECT_FALSE(arena.insert(1, {4.0, 1.0, 4, 4}));  // a farther full entry
   std::vector<double> e(5, -1.0);
-  const double f = arena.take(1, [&](std::uint32_t r, double v) { e[r] = v; });
+  const double f = arena.resolve(1, [&](std::uint32_t r, double v) { e[r] = v; });
   EXPECT_EQ(e, (std::vector<double>{0.25, -1.0, 0.75, -1.0, -1.0}));
   EXPECT_DOUBLE_EQ(f, 1.0);
+  std::vector<double> taken(5, -1.0);
+  arena.take_all([&](std::size_t pixel, std::uint32_t r, double v) {
+    EXPECT_EQ(pixel, 1u);
+    taken[r] = v;
+  });
+  EXPECT_EQ(taken, e);
   EXPECT_TRUE(arena.empty(1));  // taken
   // Through the same walk as a sorted synthetic list.
   const std::vector<CoverageEntry> sorted = {{1.0, 0.25, 0, 0}, {2.0, 1.0, 2, 2}, {3.0, 0.5, 1, 1}};
