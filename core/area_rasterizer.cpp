@@ -64,9 +64,7 @@ AreaRasterizer::AreaRasterizer(int width, int height)
                 " is out of range; use a width and height between 1 and " + std::to_string(kMaxSide));
   // Sized for a polygon covering the whole viewport; each polygon packs its bounding box at the start.
   cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 1), Cell{});
-  row_low_.assign(static_cast<std::size_t>(width), kNoRow);
-  row_high_.assign(static_cast<std::size_t>(width), -1);
-  touched_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height / 64 + 1), 0);
+  columns_.assign(static_cast<std::size_t>(width), Column{});
 }
 
 RasterResult AreaRasterizer::rasterize_into(std::span<const Vec2> polygon, std::span<double> image) {
@@ -105,7 +103,6 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
   row_begin_ = static_cast<int>(std::max(min_y, 0.0));
   const int row_top = static_cast<int>(std::ceil(std::min(max_y, static_cast<double>(height_))));
   stride_ = row_top - row_begin_ + 1;
-  mask_words_ = (stride_ - 1) / 64 + 1;
 
   const double winding_sign = orientation > 0 ? 1.0 : -1.0;
   for (std::size_t i = 0; i < n; ++i) add_edge(polygon[i], polygon[i + 1 == n ? 0 : i + 1], winding_sign);
@@ -115,19 +112,16 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
 // Columns [x0, x1) of an edge part below the viewport: it adds nothing, but the pixels above it down to
 // row 0 may be covered by the carry of the edges above, so those columns are scanned down to row 0.
 void AreaRasterizer::mark_bottom(double x0, double x1) {
-  for (int x = static_cast<int>(x0); x < x1; ++x) row_low_[x - column_begin_] = 0;  // row 0 is row_begin_
+  for (int x = static_cast<int>(x0); x < x1; ++x) columns_[static_cast<std::size_t>(x - column_begin_)].to_bottom = 1;
 }
 
 // An edge part above the viewport: for the pixels of the viewport it is the horizontal line y = height
 // (the area under it is clamped to the full column), so it only carries its projected width into the
-// cell above the top row.
+// whole column below.
 void AreaRasterizer::add_top_carry(double x0, double x1, double sign) {
   for (int x = static_cast<int>(x0); x < x1; ++x) {
     const double width = std::min(x1, x + 1.0) - std::max(x0, static_cast<double>(x));
-    const int top = height_ - row_begin_, column_index = x - column_begin_;
-    column(x)[top].carry += sign * width;
-    row_high_[column_index] = top;
-    row_low_[column_index] = std::min(row_low_[column_index], top);
+    columns_[static_cast<std::size_t>(x - column_begin_)].top_carry += sign * width;
   }
 }
 
@@ -221,78 +215,96 @@ void AreaRasterizer::add_edge(Vec2 p, Vec2 q, double winding_sign) {
 // The pixel traversal of Figure 4 for an edge piece inside the viewport: 0 <= x0 < x1 <= width and
 // 0 <= y0, y1 <= height, running left to right. Column crossings are interpolated from (x0, y0) along
 // `slope`, row crossings from (x0, y0) along 1 / slope, each clamped to the piece so rounding never
-// makes a sub-piece run backwards.
+// makes a sub-piece run backwards. A column whose piece crosses at most one row line (every column of an
+// edge with |slope| <= 1) is done without a branch: two cells, the second one given zero width when there
+// is no crossing. Steeper pieces loop over their rows.
 void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y1, double slope,
                                        double inverse_slope, double sign) {
   const double y_min = std::min(y0, y1), y_max = std::max(y0, y1);
   const int last_column = static_cast<int>(std::ceil(x1)) - 1;
+  const int side = sign > 0.0 ? 0 : 1;  // +1: the polygon lies below the edge
   int x = static_cast<int>(x0);
+  // Cells indexed by the absolute row; the column's touched ranges by the row minus row_begin_.
+  Cell* cells = column(x) - row_begin_;
+  Column* state = columns_.data() + (x - column_begin_);
   double xe = x0, ye = y0;  // entering point of the current column
-  for (;; ++x) {
+  for (;; ++x, cells += stride_, ++state) {
     double xl = x1, yl = y1;  // leaving point of the current column
     if (x < last_column) {
       xl = x + 1.0;
       yl = std::clamp(y0 + (xl - x0) * slope, y_min, y_max);
     }
-    // cells and touched are indexed by the row minus row_begin_; low and high are such rows too.
-    Cell* cells = column(x);
-    std::uint64_t* touched = touched_rows(x);
-    int& low = row_low_[x - column_begin_];
-    int& high = row_high_[x - column_begin_];
-    const int rb = row_begin_;
-    if (ye == yl) {  // horizontal within the column: one pixel (row height only for y == height)
-      const int row = static_cast<int>(ye);
-      const double dx = sign * (xl - xe);
-      const double h = ye - row;
-      cells[row - rb].area += dx * h;
-      cells[row - rb].carry += dx;
-      touch(touched, row - rb);
-      low = std::min(low, row - rb);
-      high = std::max(high, row - rb);
-    } else {
-      if (ye < yl) {
-        int row = static_cast<int>(ye);
-        low = std::min(low, row - rb);
+    int first, last;  // the rows touched in this column, first <= last
+    if (ye <= yl) {   // rising (or flat)
+      int row = static_cast<int>(ye);
+      first = row;
+      if (yl <= row + 2.0) {
+        const double t = row + 1.0;
+        const bool split = t < yl;
+        const double crossing = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
+        const double xc = split ? crossing : xl;
+        const double yc = std::min(t, yl);
+        const double d0 = sign * (xc - xe), d1 = sign * (xl - xc);
+        cells[row].area += 0.5 * d0 * ((ye - row) + (yc - row));
+        cells[row].carry += d0;
+        const int next = row + static_cast<int>(split);
+        cells[next].area += 0.5 * d1 * ((yc - next) + (yl - next));
+        cells[next].carry += d1;
+        last = next;
+      } else {
         double xa = xe, ya = ye;
         while (row + 1 < yl) {
           const double t = row + 1.0;
           const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
           const double dx = sign * (xc - xa);
-          cells[row - rb].area += 0.5 * dx * ((ya - row) + 1.0);
-          cells[row - rb].carry += dx;
-          touch(touched, row - rb);
+          cells[row].area += 0.5 * dx * ((ya - row) + 1.0);
+          cells[row].carry += dx;
           xa = xc;
           ya = t;
           ++row;
         }
         const double dx = sign * (xl - xa);
-        cells[row - rb].area += 0.5 * dx * ((ya - row) + (yl - row));
-        cells[row - rb].carry += dx;
-        touch(touched, row - rb);
-        high = std::max(high, row - rb);
+        cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
+        cells[row].carry += dx;
+        last = row;
+      }
+    } else {  // falling
+      int row = static_cast<int>(ye);
+      if (row == ye) --row;  // entering exactly on a row line from above
+      last = row;
+      if (yl >= row - 1.0) {
+        const double t = row;
+        const bool split = t > yl;
+        const double crossing = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
+        const double xc = split ? crossing : xl;
+        const double yc = std::max(t, yl);
+        const double d0 = sign * (xc - xe), d1 = sign * (xl - xc);
+        cells[row].area += 0.5 * d0 * ((ye - row) + (yc - row));
+        cells[row].carry += d0;
+        const int next = row - static_cast<int>(split);
+        cells[next].area += 0.5 * d1 * ((yc - next) + (yl - next));
+        cells[next].carry += d1;
+        first = next;
       } else {
-        int row = static_cast<int>(ye);
-        if (row == ye) --row;  // entering exactly on a row line from above
-        high = std::max(high, row - rb);
         double xa = xe, ya = ye;
         while (row > yl) {
           const double t = row;
           const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
           const double dx = sign * (xc - xa);
-          cells[row - rb].area += 0.5 * dx * ((ya - row) + 0.0);
-          cells[row - rb].carry += dx;
-          touch(touched, row - rb);
+          cells[row].area += 0.5 * dx * ((ya - row) + 0.0);
+          cells[row].carry += dx;
           xa = xc;
           ya = t;
           --row;
         }
         const double dx = sign * (xl - xa);
-        cells[row - rb].area += 0.5 * dx * ((ya - row) + (yl - row));
-        cells[row - rb].carry += dx;
-        touch(touched, row - rb);
-        low = std::min(low, row - rb);
+        cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
+        cells[row].carry += dx;
+        first = row;
       }
     }
+    state->low[side] = std::min(state->low[side], first - row_begin_);
+    state->high[side] = std::max(state->high[side], last - row_begin_);
     if (x >= last_column) break;
     xe = xl;
     ye = yl;

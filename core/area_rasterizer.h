@@ -18,9 +18,10 @@
 
 #include "core/math.h"
 
-#include <bit>
+#include <algorithm>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace aarad {
@@ -68,8 +69,22 @@ class AreaRasterizer {
     double carry = 0.0;
   };
 
-  // Phase 1 (edge traversal): fills cells_ and the touched row range of every column in
-  // [column_begin_, column_end_). Returns the winding; nothing is touched for a degenerate polygon.
+  static constexpr int kNoRow = 1 << 30;
+
+  // What the edge traversal left in one column of the box, rows counted from row_begin_. Side 0 holds
+  // the rows touched by the edges with the polygon below them (top side), side 1 by those with the
+  // polygon above them (bottom side). For a convex polygon the two ranges are the column's top and
+  // bottom crossings and every row strictly between them is untouched: its coverage is the running
+  // carry, reported without reading a cell.
+  struct Column {
+    int low[2] = {kNoRow, kNoRow};  // lowest touched row per side, kNoRow when none
+    int high[2] = {-1, -1};         // highest touched row per side, -1 when none
+    double top_carry = 0.0;         // projected width of the edge parts above the viewport
+    int to_bottom = 0;              // 1 when an edge part below the viewport crosses the column
+  };
+
+  // Phase 1 (edge traversal): fills cells_ and columns_ over [column_begin_, column_end_). Returns the
+  // winding; nothing is touched for a degenerate polygon.
   RasterResult traverse_edges(std::span<const Vec2> polygon);
   void add_edge(Vec2 p, Vec2 q, double sign);
   void add_clipped_piece(double x0, double y0, double x1, double y1, double slope, double inverse_slope,
@@ -78,78 +93,78 @@ class AreaRasterizer {
   void mark_bottom(double x0, double x1);
 
   Cell* column(int x) { return cells_.data() + static_cast<std::ptrdiff_t>(x - column_begin_) * stride_; }
-  std::uint64_t* touched_rows(int x) {
-    return touched_.data() + static_cast<std::ptrdiff_t>(x - column_begin_) * mask_words_;
-  }
-  static void touch(std::uint64_t* touched, int row) { touched[row >> 6] |= std::uint64_t{1} << (row & 63); }
-  // The highest row in [low, y] whose bit is set in `touched`, or low - 1.
-  static int next_touched_row(const std::uint64_t* touched, int y, int low);
-
-  static constexpr int kNoRow = 1 << 30;
 
   int width_, height_;
   // The current polygon's clipped bounding box: columns [column_begin_, column_end_), rows from
-  // row_begin_, stride_ rows per column (the last one is row height_, the carry from above, when the
-  // polygon reaches above the viewport). Scratch rows are numbered from row_begin_.
-  int column_begin_ = 0, column_end_ = 0, row_begin_ = 0, stride_ = 1, mask_words_ = 1;
-  std::vector<Cell> cells_;             // column-major over the box, all zero between calls
-  std::vector<int> row_low_;            // per box column: lowest touched row, kNoRow when untouched
-  std::vector<int> row_high_;           // per box column: highest touched row, -1 when untouched
-  std::vector<std::uint64_t> touched_;  // per box column, one bit per row: cell written
+  // row_begin_, stride_ rows per column (up to the row of the polygon's top, which may be row height_: a
+  // piece of edge lying on the line y = height_ leaves its carry there). Scratch rows are numbered from
+  // row_begin_.
+  int column_begin_ = 0, column_end_ = 0, row_begin_ = 0, stride_ = 1;
+  std::vector<Cell> cells_;      // column-major over the box, all zero between calls
+  std::vector<Column> columns_;  // per box column, all Column{} between calls
 };
 
-// Phase 2 (carry adjustment), fused with the visit: for each touched column, run down from its highest
-// touched row adding the carries of the rows above (the prefix sum of Figure 4), report the pixel and
-// clear its cell for the next polygon. Rows without a touched cell between two touched ones all have the
-// running carry as coverage (1 in the polygon's interior): they are reported without reading a cell,
-// jumping from touched row to touched row with the column's bit mask.
+// Phase 2 (carry adjustment), fused with the visit: for each column, run down from the top adding the
+// carries of the rows above (the prefix sum of Figure 4), report the pixel and clear its cell for the
+// next polygon. Only the rows touched by edges are read, as at most two dense runs (one per side, merged
+// when they meet); the untouched rows above, between and below them all have the running carry as
+// coverage (exactly 1 in a convex polygon's interior) and are reported without reading a cell.
 template <class Visit>
 RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
   const RasterResult result = traverse_edges(polygon);
-  for (int x = column_begin_; x < column_end_; ++x) {
-    const int low = row_low_[x - column_begin_];  // rows counted from row_begin_
-    const int high = row_high_[x - column_begin_];
-    row_low_[x - column_begin_] = kNoRow;
-    row_high_[x - column_begin_] = -1;
-    if (high < low) continue;  // no cell written in this column
-    Cell* cells = column(x);
-    std::uint64_t* touched = touched_rows(x);
-    double carry = 0.0;
-    int y = high;
-    if (y == height_ - row_begin_) {  // the part of the polygon above the viewport covers the column below it
-      carry = cells[y].carry;
-      cells[y] = Cell{};
-      --y;
-    }
-    while (y >= low) {
-      const int next = next_touched_row(touched, y, low);  // low - 1 when none is left
+  const int rb = row_begin_;
+  const int top = height_ - rb;  // the row above the viewport, counted from row_begin_
+  Cell* cells = column(column_begin_);
+  for (int x = column_begin_; x < column_end_; ++x, cells += stride_) {
+    Column& state = columns_[static_cast<std::size_t>(x - column_begin_)];
+    const Column touched = state;
+    state = Column{};
+    double carry = touched.top_carry;
+    // Rows from `from` down to just above `to` are untouched: all have the running carry as coverage.
+    auto fill = [&](int from, int to) {
       if (carry > kCoverageFloor) {
         const double coverage = carry < 1.0 ? carry : 1.0;
-        for (int row = y; row > next; --row) visit(x, row + row_begin_, coverage);
+        for (int row = from; row > to; --row) visit(x, row + rb, coverage);
       }
-      if (next < low) break;
-      const double coverage = cells[next].area + carry;
-      carry += cells[next].carry;
-      cells[next] = Cell{};
-      if (coverage > kCoverageFloor) visit(x, next + row_begin_, coverage < 1.0 ? coverage : 1.0);
-      y = next - 1;
+    };
+    // Rows from `high` down to `low` are read (each may hold A and C), reported and cleared.
+    auto dense = [&](int high, int low) {
+      for (int row = high; row >= low; --row) {
+        const double coverage = cells[row].area + carry;
+        carry += cells[row].carry;
+        cells[row] = Cell{};
+        if (coverage > kCoverageFloor) visit(x, row + rb, coverage < 1.0 ? coverage : 1.0);
+      }
+    };
+    int high_a = touched.high[0], low_a = touched.low[0], high_b = touched.high[1], low_b = touched.low[1];
+    if (high_b > high_a) {  // a reaches higher; an empty range has high -1, so a is empty only if b is
+      std::swap(high_a, high_b);
+      std::swap(low_a, low_b);
     }
-    for (int word = low >> 6; word <= high >> 6; ++word) touched[word] = 0;
+    int y = top - 1;  // the next row to report
+    if (high_a >= low_a) {
+      if (high_b >= low_b && high_b + 1 >= low_a) {  // the ranges meet: one dense run
+        low_a = std::min(low_a, low_b);
+        high_b = -1;
+      }
+      if (high_a == top) {  // carry left by an edge piece on the line y = height_: not a pixel
+        carry += cells[top].carry;
+        cells[top] = Cell{};
+        --high_a;
+      }
+      fill(y, high_a);
+      dense(high_a, low_a);
+      y = low_a - 1;
+      if (high_b >= low_b) {
+        fill(y, high_b);
+        dense(high_b, low_b);
+        y = low_b - 1;
+      }
+    }
+    if (touched.to_bottom) fill(y, -1);
   }
   column_begin_ = column_end_ = 0;
   return result;
-}
-
-inline int AreaRasterizer::next_touched_row(const std::uint64_t* touched, int y, int low) {
-  int word = y >> 6;
-  std::uint64_t bits = touched[word] & (~std::uint64_t{0} >> (63 - (y & 63)));
-  const int low_word = low >> 6;
-  while (bits == 0) {
-    if (--word < low_word) return low - 1;
-    bits = touched[word];
-  }
-  const int row = word * 64 + 63 - std::countl_zero(bits);
-  return row >= low ? row : low - 1;
 }
 
 }  // namespace aarad
