@@ -33,12 +33,12 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
   const double half = 0.5 * geometry_.resolution();
   std::unique_ptr<AreaRasterizer>& raster = face == HemicubeFace::kTop ? b.top : b.side;
   if (!raster) raster = std::make_unique<AreaRasterizer>(width, height);
-  b.arena.reset(geometry_.pixels(face));
+  b.arena.reset(width, height);
   b.scratch.resize(clipped_capacity(max_vertices));
   b.clipped.resize(clipped_capacity(max_vertices));
   b.projected.resize(clipped_capacity(max_vertices));
   const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
-  CoverageArena& arena = b.arena;
+  StagedCoverageArena& arena = b.arena;
 
   for (std::size_t i = 0; i < receivers.size(); ++i) {
     if ((prepared_.face_mask(i) & bit) == 0) continue;
@@ -71,8 +71,8 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
       double z = depth.at(px, py);
       if (!(z >= lo)) z = lo;
       if (z > hi) z = hi;
-      // Key -1/depth orders like the depth without a division; column-major like the rasterizer's visits.
-      arena.insert(static_cast<std::size_t>(x) * height + y, CoverageEntry{-z, coverage, receiver, surface});
+      // Key -1/depth orders like the depth without a division.
+      arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface});
     });
   }
   face_entries_[static_cast<std::size_t>(face)] = arena.entries();

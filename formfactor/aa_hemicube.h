@@ -46,7 +46,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
  private:
   struct FaceBuffers {
     std::unique_ptr<AreaRasterizer> top, side;
-    CoverageArena arena;
+    StagedCoverageArena arena;
     std::vector<Vec3> scratch, clipped;
     std::vector<Vec2> projected;
   };

@@ -6,23 +6,14 @@
 
 namespace aarad::formfactor {
 
-void CoverageArena::reset(std::size_t pixels) {
-  if (!clean_) {
-    std::fill(depth_.begin(), depth_.end(), kFar);
-    std::fill(list_.begin(), list_.end(), kNil);
-  }
-  if (depth_.size() < pixels) {
-    depth_.resize(pixels, kFar);
-    receiver_.resize(pixels, 0);
-    list_.resize(pixels, kNil);
-  }
-  pixels_ = pixels;
+void PartialLists::reset(std::size_t pixels) {
+  if (!clean_) std::fill(head_.begin(), head_.end(), kNil);
+  if (head_.size() < pixels) head_.resize(pixels, kNil);
   used_ = 0;
-  entries_ = 0;
   clean_ = false;
 }
 
-std::uint32_t CoverageArena::allocate(std::uint32_t capacity) {
+std::uint32_t PartialLists::allocate(std::uint32_t capacity) {
   const std::size_t needed = used_ + 1 + capacity;
   if (needed > pool_.size()) pool_.resize(std::max<std::size_t>(needed, 2 * pool_.size()));
   const auto list = static_cast<std::uint32_t>(used_);
@@ -30,8 +21,8 @@ std::uint32_t CoverageArena::allocate(std::uint32_t capacity) {
   return list;
 }
 
-bool CoverageArena::insert_partial(std::size_t pixel, const CoverageEntry& entry) {
-  std::uint32_t& list = list_[pixel];
+bool PartialLists::insert(std::size_t pixel, const CoverageEntry& entry) {
+  std::uint32_t& list = head_[pixel];
   if (list == kNil) {
     list = allocate(kFirstCapacity);
     pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0}};
@@ -82,6 +73,41 @@ bool CoverageArena::insert_partial(std::size_t pixel, const CoverageEntry& entry
   }
   cells[0].header.count = new_count;
   return true;
+}
+
+void CoverageArena::reset(std::size_t pixels) {
+  if (!clean_) std::fill(depth_.begin(), depth_.end(), kFar);
+  if (depth_.size() < pixels) {
+    depth_.resize(pixels, kFar);
+    receiver_.resize(pixels, 0);
+  }
+  lists_.reset(pixels);
+  pixels_ = pixels;
+  entries_ = 0;
+  clean_ = false;
+}
+
+void StagedCoverageArena::reset(int width, int height) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (!clean_) {
+    std::fill(depth_.begin(), depth_.end(), kFar);
+    for (std::vector<Staged>& stage : stage_) stage.clear();
+  }
+  if (depth_.size() < pixels) {
+    depth_.resize(pixels, kFar);
+    receiver_.resize(pixels, 0);
+  }
+  // Blocks of 2^k whole columns, as many as fit in kBlockPixels (at least one column).
+  block_shift_ = 0;
+  while ((static_cast<std::size_t>(height) << (block_shift_ + 1)) <= kBlockPixels && (1 << block_shift_) < width)
+    ++block_shift_;
+  height_ = static_cast<std::size_t>(height);
+  block_pixels_ = height_ << block_shift_;
+  blocks_ = (static_cast<std::size_t>(width) + (std::size_t{1} << block_shift_) - 1) >> block_shift_;
+  if (stage_.size() < blocks_) stage_.resize(blocks_);
+  pixels_ = pixels;
+  entries_ = 0;
+  clean_ = false;
 }
 
 }  // namespace aarad::formfactor

@@ -17,8 +17,8 @@
 // rounding crumbs; the walk caps the group so that f never exceeds 1). Fullness is decided from a group's own
 // coverage sum, not from f, because the product form of f only reaches 1 through a single full group.
 //
-// Memory: one pooled arena per face (nodes with next indices, per-pixel heads), reset per face without
-// freeing; no heap allocation per entry once the pool has grown to the largest face seen.
+// Memory: pooled arrays per pixel list (PartialLists), reset per face or block without freeing; no heap
+// allocation per entry once the pools have grown to the largest face seen.
 #pragma once
 
 #include <algorithm>
@@ -75,17 +75,81 @@ double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&
   return walk.covered();
 }
 
-// Per-pixel sorted lists in one pooled arena.
+// Sorted lists of partially covering entries, one per pixel, in one pool: the list code of both arenas below.
+// A list is a small contiguous array (capacity 2, doubled by moving to the end of the pool when full), kept
+// sorted by insertion sort, so it is one or two cache lines whatever order receivers arrive in. An entry joins
+// the group of its surface when the list has one (after its last piece), else goes in at its depth (behind
+// entries at the same depth; positions are decided at group heads only, so groups stay contiguous). A group
+// whose coverages reach kFullCoverage drops the entries behind it and the list refuses new groups behind it.
+class PartialLists {
+ public:
+  // Empties every list (O(1) when the walk has cleared them) and makes room for `pixels` pixels.
+  void reset(std::size_t pixels);
+
+  // Inserts a partial entry (coverage < 1) into the list of `pixel`; false when a full group hides it.
+  bool insert(std::size_t pixel, const CoverageEntry& entry);
+
+  bool empty(std::size_t pixel) const { return head_[pixel] == kNil; }
+  bool full(std::size_t pixel) const { return head_[pixel] != kNil && pool_[head_[pixel]].header.full != 0; }
+
+  // Calls visit(const CoverageEntry&) front to back for the entries of `pixel` that a walk reaches when a full
+  // entry lies at `full_depth` (kFar when none): the groups whose head is in front of it.
+  template <class Visit>
+  void visit(std::size_t pixel, double full_depth, Visit&& visit) const {
+    const Cell* cells = &pool_[head_[pixel]];
+    const std::uint32_t count = cells[0].header.count;
+    std::uint32_t prev_surface = kNoSurface;
+    for (std::uint32_t k = 1; k <= count; ++k) {
+      const CoverageEntry& e = cells[k].entry;
+      if (e.surface != prev_surface && !(e.depth < full_depth)) break;  // a group behind the full entry
+      prev_surface = e.surface;
+      visit(e);
+    }
+  }
+  void clear(std::size_t pixel) { head_[pixel] = kNil; }
+  // Marks every list cleared (the caller cleared every non-empty one), so the next reset() has nothing to do.
+  void mark_clean() { clean_ = true; }
+  void prefetch(std::size_t pixel) const {
+    if (head_[pixel] != kNil) __builtin_prefetch(&pool_[head_[pixel]]);
+  }
+
+  static constexpr double kFar = std::numeric_limits<double>::infinity();
+
+ private:
+  static constexpr std::uint32_t kNil = 0xFFFFFFFFu;
+  static constexpr std::uint32_t kFirstCapacity = 2;
+  // A list is a header followed by `capacity` entries in the pool.
+  struct Header {
+    std::uint32_t count;
+    std::uint32_t capacity;
+    std::uint32_t full;  // 1 when the list's last group covers the pixel
+    std::uint32_t unused[3];
+  };
+  union Cell {
+    CoverageEntry entry;
+    Header header;
+    Cell() : header{0, 0, 0, {0, 0, 0}} {}
+  };
+  static_assert(sizeof(Header) == sizeof(CoverageEntry));
+  std::uint32_t allocate(std::uint32_t capacity);  // a list block: header + capacity entries
+
+  std::vector<std::uint32_t> head_;  // per pixel: pool index of the list's header, or kNil
+  std::vector<Cell> pool_;           // lists; pool_[0, used_) in use
+  std::size_t used_ = 0;
+  bool clean_ = true;  // every head is kNil
+};
+
+// Per-pixel sorted lists in one pooled arena, every insertion applied at once (the reference form; the AA
+// hemicube uses StagedCoverageArena, which builds the same lists block by block).
 //
 // Layout. An entry that covers its whole pixel (A >= kFullCoverage: the interior pixels of a receiver, most of
 // the entries at high resolution) hides everything behind it, so only the nearest one matters: every pixel keeps
-// it inline, as a z-buffer would (per-pixel arrays of depth, receiver and list: inserting a full entry touches
-// the same 12 bytes per pixel as the classical hemicube's z-buffer and item buffer). Partially covering entries go into the
-// pixel's sorted list: a small contiguous array in one pool (capacity 2, doubled by moving when full), kept
-// sorted by insertion sort, so a list is one or two cache lines whatever order receivers arrive in. The walk
-// merges the two: the inline entry takes its place by depth, and everything behind it gets E = 0. A partial
-// entry behind the inline one is refused at insertion; list entries that a nearer full entry hides later are
-// skipped by the walk. Slots are cleared as take() reads them, so starting a face costs nothing.
+// it inline, as a z-buffer would (per-pixel arrays of depth and receiver: inserting a full entry touches the same
+// 12 bytes per pixel as the classical hemicube's z-buffer and item buffer). Partially covering entries go into
+// the pixel's sorted list (PartialLists). The walk merges the two: the inline entry takes its place by depth, and
+// everything behind it gets E = 0. A partial entry behind the inline one is refused at insertion; list entries
+// that a nearer full entry hides later are skipped by the walk. Slots are cleared as take_all() reads them, so
+// starting a face costs nothing.
 class CoverageArena {
  public:
   // Empties every list (O(1) after take_all) and makes room for `pixels` pixels; keeps all memory.
@@ -101,7 +165,7 @@ class CoverageArena {
       receiver_[pixel] = entry.receiver;
       return true;
     }
-    return insert_partial(pixel, entry);
+    return lists_.insert(pixel, entry);
   }
 
   // Walks the list of `pixel` front to back, calling emit(receiver, E); returns the final f.
@@ -116,23 +180,12 @@ class CoverageArena {
   // next reset() has nothing to clear).
   template <class Emit>
   void take_all(Emit&& emit) {
-    const std::size_t pixels = pixels_;
-    for (std::size_t p = 0; p < pixels; ++p) {
-      const std::uint32_t list = list_[p];
-      const double full_depth = depth_[p];
-      if (list == kNil) {
-        if (full_depth != kFar) {
-          emit(p, receiver_[p], 1.0);  // a lone full entry: E = 1
-          depth_[p] = kFar;
-        }
-        continue;
-      }
-      if (p + 16 < pixels && list_[p + 16] != kNil) __builtin_prefetch(&pool_[list_[p + 16]]);
-      CoverageWalk walk;
-      visit_entries(p, [&](const CoverageEntry& e) { emit(p, e.receiver, walk.visible(e.surface, e.coverage)); });
+    for (std::size_t p = 0; p < pixels_; ++p) {
+      if (p + 16 < pixels_) lists_.prefetch(p + 16);
+      take_pixel(p, depth_[p], receiver_[p], lists_, p, emit);
       depth_[p] = kFar;
-      list_[p] = kNil;
     }
+    lists_.mark_clean();
     clean_ = true;
   }
 
@@ -143,58 +196,113 @@ class CoverageArena {
     visit_entries(pixel, visit);
   }
 
-  bool empty(std::size_t pixel) const { return depth_[pixel] == kFar && list_[pixel] == kNil; }
+  bool empty(std::size_t pixel) const { return depth_[pixel] == kFar && lists_.empty(pixel); }
   // Whether the pixel is covered: by a full entry, or by a group of the list.
-  bool full(std::size_t pixel) const {
-    return depth_[pixel] != kFar || (list_[pixel] != kNil && header(list_[pixel]).full != 0);
+  bool full(std::size_t pixel) const { return depth_[pixel] != kFar || lists_.full(pixel); }
+  // Entries offered since the last reset (accepted or not).
+  std::size_t entries() const { return entries_; }
+
+  // The walk of one pixel with inline entry (full_depth, full_receiver) and the list `list_pixel` of `lists`:
+  // calls emit(pixel, receiver, E) front to back and clears the list. Shared with StagedCoverageArena.
+  template <class Emit>
+  static void take_pixel(std::size_t pixel, double full_depth, std::uint32_t full_receiver, PartialLists& lists,
+                         std::size_t list_pixel, Emit& emit) {
+    if (lists.empty(list_pixel)) {
+      if (full_depth != kFar) emit(pixel, full_receiver, 1.0);  // a lone full entry: E = 1
+      return;
+    }
+    CoverageWalk walk;
+    lists.visit(list_pixel, full_depth,
+                [&](const CoverageEntry& e) { emit(pixel, e.receiver, walk.visible(e.surface, e.coverage)); });
+    if (full_depth != kFar) emit(pixel, full_receiver, walk.visible(kNoSurface, 1.0));
+    lists.clear(list_pixel);
   }
+
+  static constexpr double kFar = PartialLists::kFar;
+
+ private:
+  template <class Visit>
+  void visit_entries(std::size_t pixel, Visit&& visit) const {
+    const double full_depth = depth_[pixel];
+    if (!lists_.empty(pixel)) lists_.visit(pixel, full_depth, visit);
+    if (full_depth != kFar) visit(CoverageEntry{full_depth, 1.0, receiver_[pixel], kNoSurface});
+  }
+
+  std::vector<double> depth_;            // per pixel: depth of the nearest full entry, kFar when none
+  std::vector<std::uint32_t> receiver_;  // per pixel: the nearest full entry
+  PartialLists lists_;
+  std::size_t pixels_ = 0;
+  bool clean_ = true;  // every pixel empty
+  std::size_t entries_ = 0;
+};
+
+// The arena of the AA hemicube: the same lists as CoverageArena, built block by block so that they stay in
+// cache. Pixels are column-major (pixel (x, y) at x * height + y, the area rasterizer's visiting order) and cut
+// into blocks of 2^k whole columns of at most kBlockPixels pixels.
+//
+// Why. Receivers arrive in index order, each touching a few columns, while the walk goes in pixel order; lists
+// built at once are scattered over a pool larger than the cache (at N = 1000, 1.1 million partial entries per
+// shot), so both their insertion and the walk miss the cache on nearly every partial pixel. Here insert() keeps
+// the z-buffer-like inline full entry at once, as CoverageArena does, and appends a partial entry that passes the
+// inline depth test to its block's staging buffer (a sequential write). take_all() then replays, block by block,
+// the staged entries in their arrival order into PartialLists sized for one block (which fits in L2), and walks
+// that block's pixels. Each pixel's list receives the same entries in the same order as with CoverageArena (a
+// full entry never depends on the lists, and a partial entry is tested against the inline entry at its arrival),
+// so the lists, the walk and the emitted values are identical; only the time of the insertion sort moves.
+class StagedCoverageArena {
+ public:
+  static constexpr std::size_t kBlockPixels = 16384;
+
+  // Empties the arena (O(1) after take_all) for a width x height face; keeps all memory.
+  void reset(int width, int height);
+
+  void insert(int x, int y, const CoverageEntry& entry) {
+    ++entries_;
+    const std::size_t pixel = static_cast<std::size_t>(x) * height_ + static_cast<std::size_t>(y);
+    if (!(entry.depth < depth_[pixel])) return;  // behind the nearest full entry
+    if (entry.coverage >= kFullCoverage) {
+      depth_[pixel] = entry.depth;
+      receiver_[pixel] = entry.receiver;
+      return;
+    }
+    const auto block = static_cast<std::size_t>(x) >> block_shift_;
+    stage_[block].push_back(Staged{entry, static_cast<std::uint32_t>(pixel - block * block_pixels_)});
+  }
+
+  // Walks every pixel front to back in pixel order, calling emit(pixel, receiver, E), and empties the arena.
+  template <class Emit>
+  void take_all(Emit&& emit) {
+    for (std::size_t block = 0; block < blocks_; ++block) {
+      const std::size_t begin = block * block_pixels_;
+      const std::size_t end = std::min(begin + block_pixels_, pixels_);
+      lists_.reset(end - begin);
+      for (const Staged& s : stage_[block]) lists_.insert(s.pixel, s.entry);
+      stage_[block].clear();
+      for (std::size_t p = begin; p < end; ++p) {
+        CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit);
+        depth_[p] = kFar;
+      }
+      lists_.mark_clean();
+    }
+    clean_ = true;
+  }
+
   // Entries offered since the last reset (accepted or not).
   std::size_t entries() const { return entries_; }
 
  private:
-  static constexpr std::uint32_t kNil = 0xFFFFFFFFu;
-  static constexpr std::uint32_t kFirstCapacity = 2;
-  static constexpr double kFar = std::numeric_limits<double>::infinity();
-  // A list is a header followed by `capacity` entries in the pool.
-  struct Header {
-    std::uint32_t count;
-    std::uint32_t capacity;
-    std::uint32_t full;  // 1 when the list's last group covers the pixel
-    std::uint32_t unused[3];
-  };
-  union Cell {
+  static constexpr double kFar = PartialLists::kFar;
+  struct Staged {
     CoverageEntry entry;
-    Header header;
-    Cell() : header{0, 0, 0, {0, 0, 0}} {}
+    std::uint32_t pixel;  // within the block
   };
-  static_assert(sizeof(Header) == sizeof(CoverageEntry));
-  const Header& header(std::uint32_t list) const { return pool_[list].header; }
-  bool insert_partial(std::size_t pixel, const CoverageEntry& entry);
-  std::uint32_t allocate(std::uint32_t capacity);  // a list block: header + capacity entries
 
-  template <class Visit>
-  void visit_entries(std::size_t pixel, Visit&& visit) const {
-    const double full_depth = depth_[pixel];
-    if (list_[pixel] != kNil) {
-      const Cell* cells = &pool_[list_[pixel]];
-      const std::uint32_t count = cells[0].header.count;
-      std::uint32_t prev_surface = kNoSurface;
-      for (std::uint32_t k = 1; k <= count; ++k) {
-        const CoverageEntry& e = cells[k].entry;
-        if (e.surface != prev_surface && !(e.depth < full_depth)) break;  // a group behind the full entry
-        prev_surface = e.surface;
-        visit(e);
-      }
-    }
-    if (full_depth != kFar) visit(CoverageEntry{full_depth, 1.0, receiver_[pixel], kNoSurface});
-  }
-
-  std::vector<double> depth_;           // per pixel: depth of the nearest full entry, kFar when none
+  std::vector<double> depth_;            // per pixel: depth of the nearest full entry, kFar when none
   std::vector<std::uint32_t> receiver_;  // per pixel: the nearest full entry
-  std::vector<std::uint32_t> list_;      // per pixel: pool index of the partial list's header, or kNil
-  std::vector<Cell> pool_;  // lists; pool_[0, used_) in use
-  std::size_t used_ = 0;
-  std::size_t pixels_ = 0;
+  std::vector<std::vector<Staged>> stage_;  // per block: partial entries in arrival order
+  PartialLists lists_;                      // the lists of one block
+  std::size_t pixels_ = 0, height_ = 1, block_pixels_ = 1, blocks_ = 0;
+  int block_shift_ = 0;
   bool clean_ = true;  // every pixel empty
   std::size_t entries_ = 0;
 };
