@@ -39,6 +39,8 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
   b.projected.resize(clipped_capacity(max_vertices));
   const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
   StagedCoverageArena& arena = b.arena;
+  // Entries offered to the arena, counted in a local (a counter in memory would chain every insertion).
+  std::size_t offered = 0;
 
   for (std::size_t i = 0; i < receivers.size(); ++i) {
     if ((prepared_.face_mask(i) & bit) == 0) continue;
@@ -72,15 +74,28 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
       if (!(z >= lo)) z = lo;
       if (z > hi) z = hi;
       // Key -1/depth orders like the depth without a division.
+      ++offered;
       arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface});
     });
   }
-  face_entries_[static_cast<std::size_t>(face)] = arena.entries();
+  face_entries_[static_cast<std::size_t>(face)] = offered;
   // Walk every list front to back, in the arena's column-major order.
   const std::vector<double>& weight = column_weight_[static_cast<std::size_t>(face)];
+  // Consecutive contributions of one receiver (its interior runs down a column) are summed in a register and
+  // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
+  std::uint32_t run_receiver = 0;
+  double run_sum = 0.0;
   arena.take_all([&](std::size_t pixel, std::uint32_t receiver, double visible) {
-    sums[receiver] += visible * weight[pixel];
+    const double contribution = visible * weight[pixel];
+    if (receiver != run_receiver) {
+      sums[run_receiver] += run_sum;
+      run_receiver = receiver;
+      run_sum = contribution;
+    } else {
+      run_sum += contribution;
+    }
   });
+  sums[run_receiver] += run_sum;
 }
 
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,

@@ -13,22 +13,18 @@ void PartialLists::reset(std::size_t pixels) {
   clean_ = false;
 }
 
+void PartialLists::grow(std::size_t cells) {
+  pool_.resize(std::max<std::size_t>(used_ + cells, 2 * pool_.size()));
+}
+
 std::uint32_t PartialLists::allocate(std::uint32_t capacity) {
-  const std::size_t needed = used_ + 1 + capacity;
-  if (needed > pool_.size()) pool_.resize(std::max<std::size_t>(needed, 2 * pool_.size()));
+  if (used_ + 1 + capacity > pool_.size()) grow(1 + capacity);
   const auto list = static_cast<std::uint32_t>(used_);
-  used_ = needed;
+  used_ += 1 + capacity;
   return list;
 }
 
-bool PartialLists::insert(std::size_t pixel, const CoverageEntry& entry) {
-  std::uint32_t& list = head_[pixel];
-  if (list == kNil) {
-    list = allocate(kFirstCapacity);
-    pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0}};
-    pool_[list + 1].entry = entry;
-    return true;
-  }
+bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) {
   Cell* cells = &pool_[list];
   const std::uint32_t count = cells[0].header.count;
   // Find the group of the entry's surface, else the depth position (decided at group heads only, so groups
@@ -106,7 +102,6 @@ void StagedCoverageArena::reset(int width, int height) {
   blocks_ = (static_cast<std::size_t>(width) + (std::size_t{1} << block_shift_) - 1) >> block_shift_;
   if (stage_.size() < blocks_) stage_.resize(blocks_);
   pixels_ = pixels;
-  entries_ = 0;
   clean_ = false;
 }
 

@@ -87,7 +87,17 @@ class PartialLists {
   void reset(std::size_t pixels);
 
   // Inserts a partial entry (coverage < 1) into the list of `pixel`; false when a full group hides it.
-  bool insert(std::size_t pixel, const CoverageEntry& entry);
+  bool insert(std::size_t pixel, const CoverageEntry& entry) {
+    std::uint32_t& list = head_[pixel];
+    if (list != kNil) return insert_into(list, entry);
+    // The first entry of a pixel (most partial pixels): a new list of capacity kFirstCapacity.
+    if (used_ + 1 + kFirstCapacity > pool_.size()) grow(1 + kFirstCapacity);
+    list = static_cast<std::uint32_t>(used_);
+    used_ += 1 + kFirstCapacity;
+    pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0}};
+    pool_[list + 1].entry = entry;
+    return true;
+  }
 
   bool empty(std::size_t pixel) const { return head_[pixel] == kNil; }
   bool full(std::size_t pixel) const { return head_[pixel] != kNil && pool_[head_[pixel]].header.full != 0; }
@@ -132,6 +142,8 @@ class PartialLists {
   };
   static_assert(sizeof(Header) == sizeof(CoverageEntry));
   std::uint32_t allocate(std::uint32_t capacity);  // a list block: header + capacity entries
+  void grow(std::size_t cells);                      // makes room for `cells` more cells in the pool
+  bool insert_into(std::uint32_t& list, const CoverageEntry& entry);  // into a non-empty list
 
   std::vector<std::uint32_t> head_;  // per pixel: pool index of the list's header, or kNil
   std::vector<Cell> pool_;           // lists; pool_[0, used_) in use
@@ -257,7 +269,6 @@ class StagedCoverageArena {
   void reset(int width, int height);
 
   void insert(int x, int y, const CoverageEntry& entry) {
-    ++entries_;
     const std::size_t pixel = static_cast<std::size_t>(x) * height_ + static_cast<std::size_t>(y);
     if (!(entry.depth < depth_[pixel])) return;  // behind the nearest full entry
     if (entry.coverage >= kFullCoverage) {
@@ -287,8 +298,6 @@ class StagedCoverageArena {
     clean_ = true;
   }
 
-  // Entries offered since the last reset (accepted or not).
-  std::size_t entries() const { return entries_; }
 
  private:
   static constexpr double kFar = PartialLists::kFar;
@@ -304,7 +313,6 @@ class StagedCoverageArena {
   std::size_t pixels_ = 0, height_ = 1, block_pixels_ = 1, blocks_ = 0;
   int block_shift_ = 0;
   bool clean_ = true;  // every pixel empty
-  std::size_t entries_ = 0;
 };
 
 }  // namespace aarad::formfactor
