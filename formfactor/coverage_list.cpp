@@ -89,9 +89,10 @@ void StagedCoverageArena::reset(int width, int height) {
     std::fill(depth_.begin(), depth_.end(), kFar);
     for (std::vector<Staged>& stage : stage_) stage.clear();
   }
-  if (depth_.size() < pixels) {
-    depth_.resize(pixels, kFar);
-    receiver_.resize(pixels, 0);
+  // Two columns more than the face: insert() prefetches two columns ahead.
+  if (depth_.size() < pixels + 2 * height) {
+    depth_.resize(pixels + 2 * height, kFar);
+    receiver_.resize(pixels + 2 * height, 0);
   }
   // Blocks of 2^k whole columns, as many as fit in kBlockPixels (at least one column).
   block_shift_ = 0;

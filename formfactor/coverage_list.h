@@ -270,6 +270,9 @@ class StagedCoverageArena {
 
   void insert(int x, int y, const CoverageEntry& entry) {
     const std::size_t pixel = static_cast<std::size_t>(x) * height_ + static_cast<std::size_t>(y);
+    // The receiver most likely covers the same row two columns on, visited soon: fetch it now.
+    __builtin_prefetch(&depth_[pixel + 2 * height_]);
+    __builtin_prefetch(&receiver_[pixel + 2 * height_]);
     if (!(entry.depth < depth_[pixel])) return;  // behind the nearest full entry
     if (entry.coverage >= kFullCoverage) {
       depth_[pixel] = entry.depth;
