@@ -63,7 +63,7 @@ AreaRasterizer::AreaRasterizer(int width, int height)
     throw Error("AreaRasterizer: viewport " + std::to_string(width) + " x " + std::to_string(height) +
                 " is out of range; use a width and height between 1 and " + std::to_string(kMaxSide));
   // Sized for a polygon covering the whole viewport; each polygon packs its bounding box at the start.
-  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 1), Cell{});
+  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 2), Cell{});
   columns_.assign(static_cast<std::size_t>(width), Column{});
 }
 
@@ -102,7 +102,7 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
   // polygon touches few cache lines.
   row_begin_ = static_cast<int>(std::max(min_y, 0.0));
   const int row_top = static_cast<int>(std::ceil(std::min(max_y, static_cast<double>(height_))));
-  stride_ = row_top - row_begin_ + 1;
+  stride_ = row_top - row_begin_ + 2;
 
   const double winding_sign = orientation > 0 ? 1.0 : -1.0;
   for (std::size_t i = 0; i < n; ++i) add_edge(polygon[i], polygon[i + 1 == n ? 0 : i + 1], winding_sign);
@@ -220,12 +220,29 @@ void AreaRasterizer::add_edge(Vec2 p, Vec2 q, double winding_sign) {
 // is no crossing. Steeper pieces loop over their rows.
 void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y1, double slope,
                                        double inverse_slope, double sign) {
+  if (y0 <= y1) {
+    if (sign > 0.0)
+      trace_piece<true, 1>(x0, y0, x1, y1, slope, inverse_slope);
+    else
+      trace_piece<true, -1>(x0, y0, x1, y1, slope, inverse_slope);
+  } else {
+    if (sign > 0.0)
+      trace_piece<false, 1>(x0, y0, x1, y1, slope, inverse_slope);
+    else
+      trace_piece<false, -1>(x0, y0, x1, y1, slope, inverse_slope);
+  }
+}
+
+template <bool kRising, int kSign>
+void AreaRasterizer::trace_piece(double x0, double y0, double x1, double y1, double slope, double inverse_slope) {
+  constexpr double sign = kSign;
+  constexpr int side = kSign > 0 ? 0 : 1;  // +1: the polygon lies below the edge
   const double y_min = std::min(y0, y1), y_max = std::max(y0, y1);
   const int last_column = static_cast<int>(std::ceil(x1)) - 1;
-  const int side = sign > 0.0 ? 0 : 1;  // +1: the polygon lies below the edge
+  const int rb = row_begin_;
   int x = static_cast<int>(x0);
   // Cells indexed by the absolute row; the column's touched ranges by the row minus row_begin_.
-  Cell* cells = column(x) - row_begin_;
+  Cell* cells = column(x) - rb;
   Column* state = columns_.data() + (x - column_begin_);
   double xe = x0, ye = y0;  // entering point of the current column
   for (;; ++x, cells += stride_, ++state) {
@@ -235,7 +252,7 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
       yl = std::clamp(y0 + (xl - x0) * slope, y_min, y_max);
     }
     int first, last;  // the rows touched in this column, first <= last
-    if (ye <= yl) {   // rising (or flat)
+    if constexpr (kRising) {  // ye <= yl
       int row = static_cast<int>(ye);
       first = row;
       if (yl <= row + 2.0) {
@@ -248,7 +265,7 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         cells[row].area += 0.5 * d0 * ((ye - row) + (yc - row));
         cells[row].carry += d0;
         const int next = row + static_cast<int>(split);
-        cells[next].area += 0.5 * d1 * ((yc - next) + (yl - next));
+        cells[next].area += 0.5 * d1 * (yl - t);  // from 0 at the crossing (d1 is 0 without one)
         cells[next].carry += d1;
         last = next;
       } else {
@@ -268,9 +285,9 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         cells[row].carry += dx;
         last = row;
       }
-    } else {  // falling
+    } else {  // falling: ye >= yl
       int row = static_cast<int>(ye);
-      if (row == ye) --row;  // entering exactly on a row line from above
+      if (row == ye && yl < ye) --row;  // entering exactly on a row line from above
       last = row;
       if (yl >= row - 1.0) {
         const double t = row;
@@ -282,7 +299,7 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         cells[row].area += 0.5 * d0 * ((ye - row) + (yc - row));
         cells[row].carry += d0;
         const int next = row - static_cast<int>(split);
-        cells[next].area += 0.5 * d1 * ((yc - next) + (yl - next));
+        cells[next].area += 0.5 * d1 * (1.0 + (yl - (t - 1.0)));  // from 1 at the crossing (d1 is 0 without one)
         cells[next].carry += d1;
         first = next;
       } else {
@@ -303,8 +320,8 @@ void AreaRasterizer::add_clipped_piece(double x0, double y0, double x1, double y
         first = row;
       }
     }
-    state->low[side] = std::min(state->low[side], first - row_begin_);
-    state->high[side] = std::max(state->high[side], last - row_begin_);
+    state->low[side] = std::min(state->low[side], first);
+    state->high[side] = std::max(state->high[side], last);
     if (x >= last_column) break;
     xe = xl;
     ye = yl;

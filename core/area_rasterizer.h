@@ -89,6 +89,8 @@ class AreaRasterizer {
   void add_edge(Vec2 p, Vec2 q, double sign);
   void add_clipped_piece(double x0, double y0, double x1, double y1, double slope, double inverse_slope,
                          double sign);
+  template <bool kRising, int kSign>
+  void trace_piece(double x0, double y0, double x1, double y1, double slope, double inverse_slope);
   void add_top_carry(double x0, double x1, double sign);
   void mark_bottom(double x0, double x1);
 
@@ -112,9 +114,8 @@ class AreaRasterizer {
 template <class Visit>
 RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
   const RasterResult result = traverse_edges(polygon);
-  const int rb = row_begin_;
-  const int top = height_ - rb;  // the row above the viewport, counted from row_begin_
-  Cell* cells = column(column_begin_);
+  const int top = height_;  // the row above the viewport
+  Cell* cells = column(column_begin_) - row_begin_;  // indexed by the row
   for (int x = column_begin_; x < column_end_; ++x, cells += stride_) {
     Column& state = columns_[static_cast<std::size_t>(x - column_begin_)];
     const Column touched = state;
@@ -124,7 +125,7 @@ RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& vi
     auto fill = [&](int from, int to) {
       if (carry > kCoverageFloor) {
         const double coverage = carry < 1.0 ? carry : 1.0;
-        for (int row = from; row > to; --row) visit(x, row + rb, coverage);
+        for (int row = from; row > to; --row) visit(x, row, coverage);
       }
     };
     // Rows from `high` down to `low` are read (each may hold A and C), reported and cleared.
@@ -133,7 +134,7 @@ RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& vi
         const double coverage = cells[row].area + carry;
         carry += cells[row].carry;
         cells[row] = Cell{};
-        if (coverage > kCoverageFloor) visit(x, row + rb, coverage < 1.0 ? coverage : 1.0);
+        if (coverage > kCoverageFloor) visit(x, row, coverage < 1.0 ? coverage : 1.0);
       }
     };
     int high_a = touched.high[0], low_a = touched.low[0], high_b = touched.high[1], low_b = touched.low[1];
@@ -161,7 +162,7 @@ RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& vi
         y = low_b - 1;
       }
     }
-    if (touched.to_bottom) fill(y, -1);
+    if (touched.to_bottom) fill(y, row_begin_ - 1);
   }
   column_begin_ = column_end_ = 0;
   return result;
