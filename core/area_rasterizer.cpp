@@ -239,18 +239,13 @@ void AreaRasterizer::trace_piece(double x0, double y0, double x1, double y1, dou
   constexpr int side = kSign > 0 ? 0 : 1;  // +1: the polygon lies below the edge
   const double y_min = std::min(y0, y1), y_max = std::max(y0, y1);
   const int last_column = static_cast<int>(std::ceil(x1)) - 1;
-  const int rb = row_begin_;
+  const std::ptrdiff_t stride = stride_;
   int x = static_cast<int>(x0);
-  // Cells indexed by the absolute row; the column's touched ranges by the row minus row_begin_.
-  Cell* cells = column(x) - rb;
+  Cell* cells = column(x) - row_begin_;  // indexed by the row
   Column* state = columns_.data() + (x - column_begin_);
   double xe = x0, ye = y0;  // entering point of the current column
-  for (;; ++x, cells += stride_, ++state) {
-    double xl = x1, yl = y1;  // leaving point of the current column
-    if (x < last_column) {
-      xl = x + 1.0;
-      yl = std::clamp(y0 + (xl - x0) * slope, y_min, y_max);
-    }
+  // The piece from (xe, ye) to (xl, yl) inside column x.
+  auto trace_column = [&](double xl, double yl) {
     int first, last;  // the rows touched in this column, first <= last
     if constexpr (kRising) {  // ye <= yl
       int row = static_cast<int>(ye);
@@ -322,10 +317,15 @@ void AreaRasterizer::trace_piece(double x0, double y0, double x1, double y1, dou
     }
     state->low[side] = std::min(state->low[side], first);
     state->high[side] = std::max(state->high[side], last);
-    if (x >= last_column) break;
+  };
+  for (; x < last_column; ++x, cells += stride, ++state) {
+    const double xl = x + 1.0;
+    const double yl = std::clamp(y0 + (xl - x0) * slope, y_min, y_max);
+    trace_column(xl, yl);
     xe = xl;
     ye = yl;
   }
+  trace_column(x1, y1);
 }
 
 }  // namespace aarad
