@@ -268,6 +268,8 @@ class StagedCoverageArena {
   // Empties the arena (O(1) after take_all) for a width x height face; keeps all memory.
   void reset(int width, int height);
 
+  // Offers an entry to pixel (x, y), 0 <= x < width, 0 <= y < height: a full entry in front of the inline one
+  // replaces it, a partial one in front of it is staged, anything else is dropped (as CoverageArena::insert).
   void insert(int x, int y, const CoverageEntry& entry) {
     const std::size_t pixel = static_cast<std::size_t>(x) * height_ + static_cast<std::size_t>(y);
     // The receiver most likely covers the same row two columns on, visited soon: fetch it now.
