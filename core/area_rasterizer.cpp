@@ -263,20 +263,23 @@ void AreaRasterizer::trace_piece(double x0, double y0, double x1, double y1, dou
         cells[next].area += 0.5 * d1 * (yl - t);  // from 0 at the crossing (d1 is 0 without one)
         cells[next].carry += d1;
         last = next;
-      } else {
-        double xa = xe, ya = ye;
-        while (row + 1 < yl) {
-          const double t = row + 1.0;
+      } else {  // crossings at row + 1, ..., last: at least two
+        const int top_row = static_cast<int>(yl) - (static_cast<int>(yl) == yl);
+        double t = row + 1.0;
+        double xa = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
+        double dx = sign * (xa - xe);
+        cells[row].area += 0.5 * dx * ((ye - row) + 1.0);
+        cells[row].carry += dx;
+        for (++row; row < top_row; ++row) {  // whole rows: the piece runs from their bottom to their top
+          t += 1.0;
           const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
-          const double dx = sign * (xc - xa);
-          cells[row].area += 0.5 * dx * ((ya - row) + 1.0);
+          dx = sign * (xc - xa);
+          cells[row].area += 0.5 * dx;
           cells[row].carry += dx;
           xa = xc;
-          ya = t;
-          ++row;
         }
-        const double dx = sign * (xl - xa);
-        cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
+        dx = sign * (xl - xa);
+        cells[row].area += 0.5 * dx * (yl - row);
         cells[row].carry += dx;
         last = row;
       }
@@ -297,20 +300,23 @@ void AreaRasterizer::trace_piece(double x0, double y0, double x1, double y1, dou
         cells[next].area += 0.5 * d1 * (1.0 + (yl - (t - 1.0)));  // from 1 at the crossing (d1 is 0 without one)
         cells[next].carry += d1;
         first = next;
-      } else {
-        double xa = xe, ya = ye;
-        while (row > yl) {
-          const double t = row;
+      } else {  // crossings at row, ..., bottom_row + 1: at least two
+        const int bottom_row = static_cast<int>(yl);
+        double t = row;
+        double xa = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
+        double dx = sign * (xa - xe);
+        cells[row].area += 0.5 * dx * (ye - row);
+        cells[row].carry += dx;
+        for (--row; row > bottom_row; --row) {  // whole rows: the piece runs from their top to their bottom
+          t -= 1.0;
           const double xc = std::clamp(x0 + (t - y0) * inverse_slope, xe, xl);
-          const double dx = sign * (xc - xa);
-          cells[row].area += 0.5 * dx * ((ya - row) + 0.0);
+          dx = sign * (xc - xa);
+          cells[row].area += 0.5 * dx;
           cells[row].carry += dx;
           xa = xc;
-          ya = t;
-          --row;
         }
-        const double dx = sign * (xl - xa);
-        cells[row].area += 0.5 * dx * ((ya - row) + (yl - row));
+        dx = sign * (xl - xa);
+        cells[row].area += 0.5 * dx * (1.0 + (yl - row));
         cells[row].carry += dx;
         first = row;
       }
