@@ -63,7 +63,7 @@ AreaRasterizer::AreaRasterizer(int width, int height)
     throw Error("AreaRasterizer: viewport " + std::to_string(width) + " x " + std::to_string(height) +
                 " is out of range; use a width and height between 1 and " + std::to_string(kMaxSide));
   // Sized for a polygon covering the whole viewport; each polygon packs its bounding box at the start.
-  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 2), Cell{});
+  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 1), Cell{});
   columns_.assign(static_cast<std::size_t>(width), Column{});
 }
 
@@ -102,7 +102,7 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
   // polygon touches few cache lines.
   row_begin_ = static_cast<int>(std::max(min_y, 0.0));
   const int row_top = static_cast<int>(std::ceil(std::min(max_y, static_cast<double>(height_))));
-  stride_ = row_top - row_begin_ + 2;
+  stride_ = row_top - row_begin_ + 1;
 
   const double winding_sign = orientation > 0 ? 1.0 : -1.0;
   for (std::size_t i = 0; i < n; ++i) add_edge(polygon[i], polygon[i + 1 == n ? 0 : i + 1], winding_sign);

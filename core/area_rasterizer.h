@@ -13,7 +13,7 @@
 //   polygon, with the sign carried separately, so an edge shared by two polygons of the same winding
 //   cancels bit for bit: pieces of a polygon add up to the whole with no cracks and no double counting.
 // - No allocation per call: scratch buffers sized to the viewport are allocated by the constructor and
-//   only the touched cells are read and cleared again, column by column.
+//   only the row ranges that edges touched are read and cleared again, column by column.
 #pragma once
 
 #include "core/math.h"
@@ -71,11 +71,11 @@ class AreaRasterizer {
 
   static constexpr int kNoRow = 1 << 30;
 
-  // What the edge traversal left in one column of the box, rows counted from row_begin_. Side 0 holds
-  // the rows touched by the edges with the polygon below them (top side), side 1 by those with the
-  // polygon above them (bottom side). For a convex polygon the two ranges are the column's top and
-  // bottom crossings and every row strictly between them is untouched: its coverage is the running
-  // carry, reported without reading a cell.
+  // What the edge traversal left in one column of the box (rows are pixel rows). Side 0 holds the rows
+  // touched by the edges with the polygon below them (top side), side 1 by those with the polygon above
+  // them (bottom side). For a convex polygon the two ranges are the column's top and bottom crossings
+  // and every row strictly between them is untouched: its coverage is the running carry, reported
+  // without reading a cell.
   struct Column {
     int low[2] = {kNoRow, kNoRow};  // lowest touched row per side, kNoRow when none
     int high[2] = {-1, -1};         // highest touched row per side, -1 when none
@@ -99,8 +99,8 @@ class AreaRasterizer {
   int width_, height_;
   // The current polygon's clipped bounding box: columns [column_begin_, column_end_), rows from
   // row_begin_, stride_ rows per column (up to the row of the polygon's top, which may be row height_: a
-  // piece of edge lying on the line y = height_ leaves its carry there). Scratch rows are numbered from
-  // row_begin_.
+  // piece of edge lying on the line y = height_ leaves its carry there). Cell k of a box column is row
+  // row_begin_ + k.
   int column_begin_ = 0, column_end_ = 0, row_begin_ = 0, stride_ = 1;
   std::vector<Cell> cells_;      // column-major over the box, all zero between calls
   std::vector<Column> columns_;  // per box column, all Column{} between calls
@@ -108,8 +108,8 @@ class AreaRasterizer {
 
 // Phase 2 (carry adjustment), fused with the visit: for each column, run down from the top adding the
 // carries of the rows above (the prefix sum of Figure 4), report the pixel and clear its cell for the
-// next polygon. Only the rows touched by edges are read, as at most two dense runs (one per side, merged
-// when they meet); the untouched rows above, between and below them all have the running carry as
+// next polygon. Only the row ranges touched by edges are read, as at most two dense runs (one per side,
+// merged when they meet); the untouched rows above, between and below them all have the running carry as
 // coverage (exactly 1 in a convex polygon's interior) and are reported without reading a cell.
 template <class Visit>
 RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
