@@ -20,6 +20,7 @@
 #include <fstream>
 #include <set>
 #include <string>
+#include <unistd.h>
 
 namespace aarad::refine {
 namespace {
@@ -67,13 +68,15 @@ class OutputsTest : public ::testing::Test {
     options.converge = 0.05;  // a short solve: the files are the subject here
     solver_ = std::make_unique<Solver>(*scene_, options);
     solver_->run();
-    directory_ = fs::path(AARAD_BINARY_DIR) / "test-outputs" / "cornell";
+    // ctest runs every case of this suite as its own process, two at a time: one folder per process.
+    directory_ = fs::path(AARAD_BINARY_DIR) / "test-outputs" / ("cornell-" + std::to_string(getpid()));
     fs::remove_all(directory_);
     const OutputResult result = write_solution_files(*solver_, directory_, {.width = 160, .height = 120});
     report_ = make_report(*solver_, mesh::check_invariants(solver_->hierarchy()), {.output = result.seconds});
     write_report(report_, directory_ / "report.json");
   }
   static void TearDownTestSuite() {
+    fs::remove_all(directory_);
     solver_.reset();
     scene_.reset();
   }

@@ -197,8 +197,8 @@ void add_solve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--ff", options->solver.backend, "Form-factor back end: aa-hemicube, hemicube, analytic")
       ->capture_default_str();
-  cmd->add_option("--resolution", options->solver.resolution, "Hemicube pixels along the full top face")
-      ->check(CLI::Range(1, 100000))
+  cmd->add_option("--resolution", options->solver.resolution, "Hemicube pixels along the full top face [2, 8192]")
+      ->check(CLI::Range(2, 8192))
       ->capture_default_str();
   cmd->add_option("--converge", options->solver.converge, "Stop when unshot flux < this x emitted flux")
       ->check(CLI::Range(0.0, 1.0))

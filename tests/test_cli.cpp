@@ -1,0 +1,139 @@
+// The `aarad` program as a user runs it: `inspect` and `formfactors` on built-in and OBJ scenes, in text and
+// JSON, and the exit codes of docs/solver.md for bad input (1: a bad scene, 2: a bad command line).
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ProgramRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// ctest runs every case as its own process, two at a time: one folder per process.
+fs::path work_dir() {
+  const fs::path dir = fs::path(AARAD_BINARY_DIR) / "test-cli" / std::to_string(getpid());
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Runs `aarad ARGS` through the shell with stdout and stderr captured in files.
+ProgramRun aarad(const std::string& args) {
+  const fs::path dir = work_dir();
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command = std::string(AARAD_BINARY_DIR "/apps/aarad/aarad ") + args + " >" + out.string() +
+                              " 2>" + err.string();
+  const int status = std::system(command.c_str());
+  ProgramRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+fs::path write_file(const std::string& name, const std::string& text) {
+  const fs::path path = work_dir() / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(Cli, InspectCornellAsJson) {
+  const ProgramRun r = aarad("inspect cornell --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["scene"], "cornell");
+  EXPECT_EQ(j["source"], "built-in");
+  // references.md: 8 groups; the floor cut into convex pieces and the split left wall give 17 physical surfaces.
+  EXPECT_EQ(j["groups"].size(), 8u);
+  EXPECT_EQ(j["surfaces"].size(), 17u);
+  ASSERT_EQ(j["emitters"].size(), 1u);
+  EXPECT_EQ(j["emitters"][0]["group"], "light");
+  EXPECT_FALSE(j["camera"].is_null());
+}
+
+TEST(Cli, InspectCornellAsText) {
+  const ProgramRun r = aarad("inspect cornell");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("physical surfaces"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("total emitted flux"), std::string::npos) << r.out;
+}
+
+TEST(Cli, InspectObjWithMissingMtlWarns) {
+  const fs::path obj = write_file("quad_no_mtl.obj",
+                                  "mtllib missing.mtl\n"
+                                  "o quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  const ProgramRun r = aarad("inspect " + obj.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["source"], "obj");
+  EXPECT_DOUBLE_EQ(j["total_area"].get<double>(), 1.0);
+  ASSERT_FALSE(j["warnings"].empty());
+  EXPECT_NE(j["warnings"].dump().find("missing.mtl"), std::string::npos) << j["warnings"].dump();
+}
+
+TEST(Cli, MissingSceneFileExitsOneAndNamesIt) {
+  const ProgramRun r = aarad("inspect /nonexistent/room.obj");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("/nonexistent/room.obj"), std::string::npos) << r.err;
+}
+
+TEST(Cli, BadCoordinateExitsOneAndNamesFileAndLine) {
+  const fs::path obj = write_file("nan.obj", "o quad\nv 0 0 0\nv nan 0 0\nv 1 1 0\nf 1 2 3\n");
+  const ProgramRun r = aarad("inspect " + obj.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("nan.obj"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(":3"), std::string::npos) << r.err;  // the line of the bad vertex
+}
+
+TEST(Cli, UnknownOptionAndBadResolutionExitTwo) {
+  EXPECT_EQ(aarad("inspect cornell --no-such-option").code, 2);
+  EXPECT_EQ(aarad("").code, 2);  // a sub-command is required
+  for (const char* command : {"formfactors cornell --from light --resolution 1",
+                              "formfactors cornell --from light --resolution 8193", "solve --resolution 1"}) {
+    const ProgramRun r = aarad(command);
+    EXPECT_EQ(r.code, 2) << command;
+    EXPECT_NE(r.err.find("--resolution"), std::string::npos) << command << ": " << r.err;
+  }
+}
+
+TEST(Cli, FormfactorsFromTheLightAsJson) {
+  const ProgramRun r = aarad("formfactors cornell --from light --ff analytic --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  // Analytic form factors from the centroid of the light to every other group of the closed-but-for-the-front
+  // box: each is in (0, 1), and together they are below 1 (the open front takes the rest).
+  double sum = 0.0;
+  std::size_t positive = 0;
+  ASSERT_TRUE(j.contains("receivers")) << r.out;
+  for (const auto& row : j["receivers"]) {
+    const double f = row["form_factor"].get<double>();
+    EXPECT_GE(f, 0.0);
+    EXPECT_LT(f, 1.0);
+    sum += f;
+    if (f > 0.0) ++positive;
+  }
+  EXPECT_GE(positive, 5u);
+  EXPECT_GT(sum, 0.5);
+  EXPECT_LT(sum, 1.0);
+  EXPECT_NEAR(j["total"].get<double>(), sum, 1e-9);
+  EXPECT_EQ(j["method"], "analytic");
+}
+
+}  // namespace
