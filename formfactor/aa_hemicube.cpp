@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace aarad::formfactor {
@@ -12,7 +13,7 @@ AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {
   for (int f = 0; f < kHemicubeFaces; ++f) {
     const auto face = static_cast<HemicubeFace>(f);
     const int width = geometry_.width(face), height = geometry_.height(face);
-    const std::span<const double> weight = geometry_.coverage_weight(face);
+    const std::span<const double> weight = geometry_.delta(face);
     std::vector<double>& column = column_weight_[static_cast<std::size_t>(f)];
     column.resize(weight.size());
     for (int x = 0; x < width; ++x)
@@ -39,6 +40,7 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
   b.projected.resize(clipped_capacity(max_vertices));
   const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
   StagedCoverageArena& arena = b.arena;
+  const int half_row = face != HemicubeFace::kTop && geometry_.resolution() % 2 != 0 ? height - 1 : -1;
   // Entries offered to the arena, counted in a local (a counter in memory would chain every insertion).
   std::size_t offered = 0;
 
@@ -68,14 +70,23 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const auto receiver = static_cast<std::uint32_t>(i);
     const std::uint32_t surface = receivers.surface(i);
+    // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is taken at one point of the
+    // pixel (its centre moved into the receiver's bounding box) and 1/depth is affine, so over the pixel it stays
+    // within |alpha| + |beta| of that value. One bound per receiver, rounded up into a float.
+    const double reach = std::abs(depth.alpha) + std::abs(depth.beta);
+    float spread = static_cast<float>(reach);
+    if (spread < reach) spread = std::nextafter(spread, std::numeric_limits<float>::infinity());
     raster->rasterize(std::span<const Vec2>(b.projected.data(), m), [&](int x, int y, double coverage) {
+      // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that
+      // the walk's fractions refer to the area receivers can cover there.
+      if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
       const double px = std::clamp(x + 0.5, x0, x1), py = std::clamp(y + 0.5, y0, y1);
       double z = depth.at(px, py);
       if (!(z >= lo)) z = lo;
       if (z > hi) z = hi;
       // Key -1/depth orders like the depth without a division.
       ++offered;
-      arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface});
+      arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface, spread});
     });
   }
   face_entries_[static_cast<std::size_t>(face)] = offered;

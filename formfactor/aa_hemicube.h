@@ -54,7 +54,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
                   std::vector<double>& sums);
 
   HemicubeGeometry geometry_;
-  // Coverage weights of every face in the arena's column-major order (pixel (x, y) at x * height + y).
+  // Delta form factors of every face in the arena's column-major order (pixel (x, y) at x * height + y).
   std::array<std::vector<double>, kHemicubeFaces> column_weight_;
   PreparedReceivers prepared_;
   std::array<std::vector<double>, kHemicubeFaces> face_sums_;

@@ -4,24 +4,39 @@
 // Every pixel keeps the receivers that cover part of it, sorted front to back on insertion (insertion sort, as
 // the paper does). Walking a list front to back, receiver k gets the visible fraction
 //     E_k = A_k (1 - f_{k-1}),   f_k = f_{k-1} + E_k,   f_{-1} = 0,
-// where A_k is the fraction of the pixel's area the receiver covers. Pieces of one physical surface never
-// occlude one another (the paper's identical-z exception): consecutive entries of one surface form a group and
-// all use the f in front of the group; f grows by the group's total after it.
+// where A_k is the fraction of the pixel's area the receiver covers.
 //
-// A full pixel. A group whose coverages add up to 1 (within kFullCoverage) hides everything behind it: the
-// walk gives E = A (1 - 1) = 0 there. The arena then drops the entries behind that group and refuses new
-// entries that would go behind it, so a covered pixel stops growing (the paper: "when the entire pixel area is
-// consumed, no items are inserted"). Two kinds of entries are still accepted by a full pixel: entries in front
-// of the full group (they occlude part of it; it stays full, since the group's own sum does not change), and
-// entries of the full group's own surface, which join the group (for a surface tiled by its pieces they are
-// rounding crumbs; the walk caps the group so that f never exceeds 1). Fullness is decided from a group's own
-// coverage sum, not from f, because the product form of f only reaches 1 through a single full group.
+// Layers: entries that cannot be ordered inside the pixel. The recurrence treats every entry as lying behind
+// the ones before it. That is wrong for receivers that are side by side in the pixel rather than one behind the
+// other: pieces of one surface, and different surfaces that meet inside the pixel (two walls at a corner, a
+// block standing on the floor). There the entry behind loses A_front A_back of its share (the paper's pure
+// underestimation, section 3.2.5), a deficit along every junction of the scene. The paper lets entries at
+// identical depth share the f in front of them; we generalise that rule. Each entry carries the range of its
+// depth key over the part of the pixel it can occupy (key +- spread). Walking front to back, an entry whose range
+// overlaps the ranges of the entries before it joins their layer (pieces of one surface always do). A layer
+// whose coverages add up to at most 1 is taken as side by side: every entry gets A (1 - f_front), f_front being
+// the f in front of the layer, and f grows by the layer's total after it; the pieces of a corner or of a tiled
+// surface then add up exactly. A layer whose coverages add up to more than 1 must overlap in the pixel, so its
+// entries are walked with the recurrence, a group of one surface at a time (consecutive entries of one surface
+// share the f in front of their group). With no overlapping ranges this is the paper's walk, entry for entry.
+//
+// A full pixel. A group of one surface whose coverages add up to 1 (within kFullCoverage) hides everything
+// behind it: the walk gives E = A (1 - 1) = 0 there. The arena then drops the entries behind that group and
+// refuses new entries that would go behind it, so a covered pixel stops growing (the paper: "when the entire
+// pixel area is consumed, no items are inserted"). Two kinds of entries are still accepted by a full pixel:
+// entries in front of the full group (they occlude part of it; it stays full, since the group's own sum does not
+// change), and entries of the full group's own surface, which join the group (for a surface tiled by its pieces
+// they are rounding crumbs; the walk caps the group so that f never exceeds 1). Fullness is decided from a group's
+// own coverage sum, not from f, because the product form of f only reaches 1 through a single full group. An
+// entry dropped this way would get E = 0 from the walk anyway: its layer holds the full group, so its coverages
+// add up to more than 1 and the recurrence gives everything behind the full group nothing.
 //
 // Memory: pooled arrays per pixel list (PartialLists), reset per face or block without freeing; no heap
 // allocation per entry once the pools have grown to the largest face seen.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -33,37 +48,73 @@ namespace aarad::formfactor {
 inline constexpr std::uint32_t kNoSurface = 0xFFFFFFFFu;
 // A group whose coverage sum reaches this hides what lies behind it.
 inline constexpr double kFullCoverage = 1.0 - 1e-12;
+// A layer whose coverages add up to at most 1 + kLayerSlack is taken as side by side (rounding of exact areas).
+inline constexpr double kLayerSlack = 1e-9;
+// Depth ranges closer than this, relative to the key, overlap (rounding of two planes evaluated at a junction).
+inline constexpr double kLayerTouch = 1e-9;
 
 struct CoverageEntry {
   double depth = 0.0;     // any key that grows with the distance along the pixel's ray; smaller is nearer
   double coverage = 0.0;  // A: fraction of the pixel's area covered by the receiver, in [0, 1]
   std::uint32_t receiver = 0;
   std::uint32_t surface = 0;  // physical-surface id: entries of one surface do not occlude each other
+  float spread = 0.0f;        // the key ranges over [depth - spread, depth + spread] in the pixel (rounded up)
 };
 
-// The front-to-back recurrence of section 3.2.1 with the same-surface rule, one entry at a time.
+// The front-to-back walk of section 3.2.1 with layers (see the top of this file). Walks one sorted list, then
+// optionally one more entry behind it.
 class CoverageWalk {
  public:
-  // The visible fraction E of the next entry (front to back) of `surface` with coverage A.
-  double visible(std::uint32_t surface, double coverage) {
-    if (surface != surface_) {
-      surface_ = surface;
-      in_front_ = covered_;
+  // Walks `list`, sorted front to back with the entries of one surface consecutive, calling emit(receiver, E).
+  template <class Emit>
+  void walk(std::span<const CoverageEntry> list, Emit&& emit) {
+    const std::size_t n = list.size();
+    if (n == 1) {  // most partial pixels: nothing to layer
+      emit(list[0].receiver, take(list[0].coverage * (1.0 - covered_)));
+      return;
     }
-    double e = coverage * (1.0 - in_front_);
-    // Pieces of one surface that overlap (rounding crumbs, or bad input) cannot cover more than the pixel.
-    e = std::min(e, 1.0 - covered_);
-    if (e < 0.0) e = 0.0;
-    covered_ += e;
-    return e;
+    std::size_t i = 0;
+    while (i < n) {
+      // The layer starting at i: whole groups of one surface, while the next group's range overlaps.
+      std::size_t j = i;
+      double far = -std::numeric_limits<double>::infinity(), sum = 0.0;
+      do {
+        const std::uint32_t surface = list[j].surface;
+        do {
+          far = std::max(far, list[j].depth + list[j].spread);
+          sum += list[j].coverage;
+          ++j;
+        } while (j < n && list[j].surface == surface);
+      } while (j < n && list[j].depth - list[j].spread <= far + kLayerTouch * std::abs(far));
+      if (sum <= 1.0 + kLayerSlack) {
+        // Side by side: every entry of the layer sees the f in front of it.
+        const double open = 1.0 - covered_;
+        for (std::size_t k = i; k < j; ++k) emit(list[k].receiver, take(list[k].coverage * open));
+      } else {
+        // Overlapping in the pixel: the recurrence, one group of one surface at a time.
+        double open = 0.0;
+        for (std::size_t k = i; k < j; ++k) {
+          if (k == i || list[k].surface != list[k - 1].surface) open = 1.0 - covered_;
+          emit(list[k].receiver, take(list[k].coverage * open));
+        }
+      }
+      i = j;
+    }
   }
+  // The visible fraction of one more entry with coverage A behind everything walked so far.
+  double behind(double coverage) { return take(coverage * (1.0 - covered_)); }
   // f after the entries walked so far.
   double covered() const { return covered_; }
 
  private:
+  // Adds a share to f, capped so that f never exceeds 1 (overlapping pieces of one surface, rounding).
+  double take(double share) {
+    double e = std::min(share, 1.0 - covered_);
+    if (e < 0.0) e = 0.0;
+    covered_ += e;
+    return e;
+  }
   double covered_ = 0.0;
-  double in_front_ = 0.0;
-  std::uint32_t surface_ = kNoSurface;
 };
 
 // Walks a list already sorted front to back, calling emit(receiver, E) for every entry; returns the final f.
@@ -71,7 +122,7 @@ class CoverageWalk {
 template <class Emit>
 double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&& emit) {
   CoverageWalk walk;
-  for (const CoverageEntry& e : front_to_back) emit(e.receiver, walk.visible(e.surface, e.coverage));
+  walk.walk(front_to_back, emit);
   return walk.covered();
 }
 
@@ -94,7 +145,7 @@ class PartialLists {
     if (used_ + 1 + kFirstCapacity > pool_.size()) grow(1 + kFirstCapacity);
     list = static_cast<std::uint32_t>(used_);
     used_ += 1 + kFirstCapacity;
-    pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0}};
+    pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0, 0, 0}};
     pool_[list + 1].entry = entry;
     return true;
   }
@@ -102,19 +153,19 @@ class PartialLists {
   bool empty(std::size_t pixel) const { return head_[pixel] == kNil; }
   bool full(std::size_t pixel) const { return head_[pixel] != kNil && pool_[head_[pixel]].header.full != 0; }
 
-  // Calls visit(const CoverageEntry&) front to back for the entries of `pixel` that a walk reaches when a full
-  // entry lies at `full_depth` (kFar when none): the groups whose head is in front of it.
-  template <class Visit>
-  void visit(std::size_t pixel, double full_depth, Visit&& visit) const {
+  // The entries of `pixel` that a walk reaches, front to back, when a full entry lies at `full_depth` (kFar when
+  // none): the groups whose head is in front of it.
+  std::span<const CoverageEntry> reached(std::size_t pixel, double full_depth) const {
     const Cell* cells = &pool_[head_[pixel]];
     const std::uint32_t count = cells[0].header.count;
-    std::uint32_t prev_surface = kNoSurface;
-    for (std::uint32_t k = 1; k <= count; ++k) {
+    std::uint32_t prev_surface = kNoSurface, k = 1;
+    for (; k <= count; ++k) {
       const CoverageEntry& e = cells[k].entry;
       if (e.surface != prev_surface && !(e.depth < full_depth)) break;  // a group behind the full entry
       prev_surface = e.surface;
-      visit(e);
     }
+    static_assert(sizeof(Cell) == sizeof(CoverageEntry));
+    return {&cells[1].entry, k - 1};
   }
   void clear(std::size_t pixel) { head_[pixel] = kNil; }
   // Marks every list cleared (the caller cleared every non-empty one), so the next reset() has nothing to do.
@@ -133,12 +184,12 @@ class PartialLists {
     std::uint32_t count;
     std::uint32_t capacity;
     std::uint32_t full;  // 1 when the list's last group covers the pixel
-    std::uint32_t unused[3];
+    std::uint32_t unused[5];
   };
   union Cell {
     CoverageEntry entry;
     Header header;
-    Cell() : header{0, 0, 0, {0, 0, 0}} {}
+    Cell() : header{0, 0, 0, {0, 0, 0, 0, 0}} {}
   };
   static_assert(sizeof(Header) == sizeof(CoverageEntry));
   std::uint32_t allocate(std::uint32_t capacity);  // a list block: header + capacity entries
@@ -184,7 +235,9 @@ class CoverageArena {
   template <class Emit>
   double resolve(std::size_t pixel, Emit&& emit) const {
     CoverageWalk walk;
-    visit_entries(pixel, [&](const CoverageEntry& e) { emit(e.receiver, walk.visible(e.surface, e.coverage)); });
+    const double full_depth = depth_[pixel];
+    if (!lists_.empty(pixel)) walk.walk(lists_.reached(pixel, full_depth), emit);
+    if (full_depth != kFar) emit(receiver_[pixel], walk.behind(1.0));
     return walk.covered();
   }
 
@@ -224,9 +277,9 @@ class CoverageArena {
       return;
     }
     CoverageWalk walk;
-    lists.visit(list_pixel, full_depth,
-                [&](const CoverageEntry& e) { emit(pixel, e.receiver, walk.visible(e.surface, e.coverage)); });
-    if (full_depth != kFar) emit(pixel, full_receiver, walk.visible(kNoSurface, 1.0));
+    walk.walk(lists.reached(list_pixel, full_depth),
+              [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); });
+    if (full_depth != kFar) emit(pixel, full_receiver, walk.behind(1.0));
     lists.clear(list_pixel);
   }
 
@@ -236,7 +289,8 @@ class CoverageArena {
   template <class Visit>
   void visit_entries(std::size_t pixel, Visit&& visit) const {
     const double full_depth = depth_[pixel];
-    if (!lists_.empty(pixel)) lists_.visit(pixel, full_depth, visit);
+    if (!lists_.empty(pixel))
+      for (const CoverageEntry& e : lists_.reached(pixel, full_depth)) visit(e);
     if (full_depth != kFar) visit(CoverageEntry{full_depth, 1.0, receiver_[pixel], kNoSurface});
   }
 

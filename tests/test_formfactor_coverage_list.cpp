@@ -1,6 +1,7 @@
 // The per-pixel coverage lists of the AA hemicube (Chandran et al., section 3.2): the front-to-back walk
-// E_k = A_k (1 - f_{k-1}), the same-surface rule, the full-pixel rule, and the error bounds of sections
-// 3.2.5 and 3.2.6 on synthetic pixel lists.
+// E_k = A_k (1 - f_{k-1}), the same-surface rule, layers of entries whose depth ranges overlap, the full-pixel
+// rule, and the error bounds of sections 3.2.5 and 3.2.6 on synthetic pixel lists (entries at distinct depths
+// without spread, so the paper's plain walk).
 //
 // The paper's configurations, worked out (docs/form-factors.md):
 // - Pure underestimation (every patch visible): n patches side by side with A_i = 1/n fill the pixel; the walk
@@ -50,6 +51,55 @@ TEST(FormfactorCoverageList, SameSurfacePiecesShareTheFractionInFront) {
   EXPECT_DOUBLE_EQ(e[1], 0.25 * 0.5);
   EXPECT_DOUBLE_EQ(e[2], 0.75 * 0.5);  // not 0.75 * (1 - 0.5 - 0.125)
   EXPECT_DOUBLE_EQ(e[3], 0.0);         // behind a full surface
+  EXPECT_DOUBLE_EQ(f, 1.0);
+}
+
+TEST(FormfactorCoverageList, SurfacesMeetingInThePixelShareItSideBySide) {
+  // A floor piece and a wall piece meeting along a line through the pixel: their depth ranges overlap, their
+  // coverages add up to 1, so both are visible whole (the paper's walk would give the wall 0.7 x 0.4 = 0.28).
+  const std::vector<CoverageEntry> corner = {{2.0, 0.6, 0, 1, 0.1f}, {2.05, 0.4, 1, 2, 0.1f}};
+  std::vector<double> e(2);
+  double f = resolve_front_to_back(corner, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.6);
+  EXPECT_DOUBLE_EQ(e[1], 0.4);
+  EXPECT_DOUBLE_EQ(f, 1.0);
+  // The same two behind an occluder that covers 0.5: each keeps its share of the uncovered half.
+  const std::vector<CoverageEntry> behind = {{1.0, 0.5, 2, 3}, {2.0, 0.6, 0, 1, 0.1f}, {2.05, 0.4, 1, 2, 0.1f}};
+  std::vector<double> g(3);
+  f = resolve_front_to_back(behind, [&](std::uint32_t r, double v) { g[r] = v; });
+  EXPECT_DOUBLE_EQ(g[2], 0.5);
+  EXPECT_DOUBLE_EQ(g[0], 0.3);
+  EXPECT_DOUBLE_EQ(g[1], 0.2);
+  EXPECT_DOUBLE_EQ(f, 1.0);
+  // Identical depth without a spread (the paper's identical-z exception) is a layer too.
+  const std::vector<CoverageEntry> same_z = {{2.0, 0.6, 0, 1}, {2.0, 0.4, 1, 2}};
+  EXPECT_DOUBLE_EQ(total_visible(same_z), 1.0);
+}
+
+TEST(FormfactorCoverageList, OverlappingRangesThatOverfillThePixelUseTheRecurrence) {
+  // Depth ranges overlap, but the coverages add up to more than the pixel, so the entries overlap in the
+  // pixel: the walk falls back to E = A (1 - f), nearest first.
+  const std::vector<CoverageEntry> list = {{2.0, 0.7, 0, 1, 0.1f}, {2.05, 0.6, 1, 2, 0.1f}};
+  std::vector<double> e(2);
+  const double f = resolve_front_to_back(list, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.7);
+  EXPECT_DOUBLE_EQ(e[1], 0.6 * 0.3);
+  EXPECT_DOUBLE_EQ(f, 1.0 - 0.3 * 0.4);
+  // Ranges apart: the recurrence whatever the coverages.
+  const std::vector<CoverageEntry> apart = {{2.0, 0.6, 0, 1, 0.01f}, {2.05, 0.4, 1, 2, 0.01f}};
+  EXPECT_DOUBLE_EQ(total_visible(apart), 0.6 + 0.4 * 0.4);
+}
+
+TEST(FormfactorCoverageList, LayersChainThroughOverlappingRanges) {
+  // Three pieces of three surfaces, each range overlapping the next (a corner of three walls): one layer.
+  const std::vector<CoverageEntry> list = {{1.0, 0.2, 0, 1, 0.3f}, {1.5, 0.3, 1, 2, 0.3f}, {2.0, 0.5, 2, 3, 0.3f},
+                                           {5.0, 0.9, 3, 4, 0.1f}};
+  std::vector<double> e(4);
+  const double f = resolve_front_to_back(list, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.2);
+  EXPECT_DOUBLE_EQ(e[1], 0.3);
+  EXPECT_DOUBLE_EQ(e[2], 0.5);
+  EXPECT_DOUBLE_EQ(e[3], 0.0);  // behind a covered pixel
   EXPECT_DOUBLE_EQ(f, 1.0);
 }
 

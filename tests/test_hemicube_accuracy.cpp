@@ -205,14 +205,98 @@ TEST(HemicubeAccuracy, ClosedBoxSumsToOne) {
     for (const Shooter& s : shooters) {
       // Classical: every pixel sample belongs to exactly one wall and the exact delta form factors sum to 1.
       EXPECT_NEAR(box_sum(classical, s, view), 1.0, 1e-12) << n;
-      // AA: exact inside the walls; where two walls share a pixel, the paper's estimate E = A (1 - f)
-      // underestimates the one behind by A_front A_back <= 1/4 of the pixel (section 3.2.5), an O(1/N) seam term.
+      // AA: exact inside the walls. Where walls meet inside a pixel their depth ranges overlap, so they form
+      // one layer and share the pixel side by side (coverage_list.h); the paper's plain E = A (1 - f) would
+      // lose A_front A_back there (section 3.2.5), 0.2-0.8 % of the hemisphere at these resolutions.
       const double aa_sum = box_sum(aa, s, view);
       std::printf("box N=%d: AA sum - 1 = %.3e\n", n, aa_sum - 1.0);
-      EXPECT_LE(aa_sum, 1.0 + 1e-12) << n;
-      EXPECT_NEAR(aa_sum, 1.0, 1.0 / n) << n;
+      EXPECT_NEAR(aa_sum, 1.0, 1e-12) << n;
     }
   }
+}
+
+// A closed room with a block standing on its floor: the floor is cut around the block's footprint into
+// convex pieces of one surface (as the Cornell box's floor), the block has a top and four sides, each its own
+// surface. Junctions of different surfaces now run through the middle of the hemisphere (block sides on the
+// floor, block edges), not only along the room's corners.
+ReceiverView room_with_block() {
+  ReceiverView view;
+  const double w = 1.0, d = 1.3, h = 0.9;  // room [0, w] x [0, d] x [0, h]
+  const Vec3 lo(0.3, 0.5, 0.0), size(0.3, 0.3, 0.35);  // block footprint corner and size
+  const Vec3 ex(1, 0, 0), ey(0, 1, 0), ez(0, 0, 1);
+  std::vector<Polygon> floor;
+  for (const Polygon& piece : {rectangle({0, 0, 0}, lo.x * ex, d * ey),
+                               rectangle({lo.x + size.x, 0, 0}, (w - lo.x - size.x) * ex, d * ey),
+                               rectangle({lo.x, 0, 0}, size.x * ex, lo.y * ey),
+                               rectangle({lo.x, lo.y + size.y, 0}, size.x * ex, (d - lo.y - size.y) * ey)}) {
+    const auto cut = grid(piece[0], piece[1] - piece[0], piece[3] - piece[0], 2, 2);
+    floor.insert(floor.end(), cut.begin(), cut.end());
+  }
+  add_surface(view, floor, 0, 0);
+  std::uint32_t patch = 100;
+  auto wall = [&](const std::vector<Polygon>& pieces, std::uint32_t surface) {
+    add_surface(view, pieces, surface, patch);
+    patch += static_cast<std::uint32_t>(pieces.size());
+  };
+  wall(grid(h * ez, d * ey, w * ex, 3, 3), 1);        // ceiling, facing down
+  wall(grid(Vec3(0), d * ey, h * ez, 3, 3), 2);       // x = 0, facing +x
+  wall(grid(w * ex, h * ez, d * ey, 3, 3), 3);        // x = w, facing -x
+  wall(grid(Vec3(0), h * ez, w * ex, 3, 3), 4);       // y = 0, facing +y
+  wall(grid(d * ey, w * ex, h * ez, 3, 3), 5);        // y = d, facing -y
+  const Vec3 bx = size.x * ex, by = size.y * ey, bz = size.z * ez;
+  wall(grid(lo + bz, bx, by, 2, 2), 6);               // block top, facing +z
+  wall(grid(lo, bz, by, 2, 2), 7);                    // x = 0.3, facing -x
+  wall(grid(lo + bx, by, bz, 2, 2), 8);               // x = 0.6, facing +x
+  wall(grid(lo, bx, bz, 2, 2), 9);                    // y = 0.5, facing -y
+  wall(grid(lo + by, bz, bx, 2, 2), 10);              // y = 0.8, facing +y
+  return view;
+}
+
+TEST(HemicubeAccuracy, RoomWithABlockOnTheFloorSumsToOne) {
+  const ReceiverView view = room_with_block();
+  const std::vector<Shooter> shooters = {
+      rotated_shooter({0.31, 0.72, 0.4}, glm::normalize(Vec3(0.4, -0.3, -1.0)), 0.5),   // just above the block
+      rotated_shooter({0.15, 0.3, 0.1}, glm::normalize(Vec3(1.0, 1.0, 0.2)), 0.2),      // low, facing the block
+      rotated_shooter({0.8, 1.1, 0.6}, glm::normalize(Vec3(-0.7, -1.0, -0.6)), 1.1),    // a far corner
+  };
+  for (int n : {50, 100, 151}) {
+    AaHemicubeBackend aa(n);
+    HemicubeBackend classical(n);
+    for (const Shooter& s : shooters) {
+      EXPECT_NEAR(box_sum(classical, s, view), 1.0, 1e-12) << n;
+      // Where surfaces meet inside a pixel they form a layer, and where the block hides a surface that covers
+      // the rest of the pixel the walk is exact. What remains are the few pixels where one surface lies partly
+      // in front of the block and partly behind it (the floor around the block's base seen past its edge): no
+      // depth order of whole entries resolves those, and the walk underestimates them (section 3.2.5).
+      // Measured: |sum - 1| <= 7.9e-5 (N = 50); the paper's plain walk is 2.4e-3 to 8.5e-3 short here.
+      const double aa_sum = box_sum(aa, s, view);
+      std::printf("room with block N=%d: AA sum - 1 = %.3e\n", n, aa_sum - 1.0);
+      EXPECT_LE(aa_sum, 1.0 + 1e-12) << n;
+      EXPECT_NEAR(aa_sum, 1.0, 1e-4) << n;
+    }
+  }
+}
+
+TEST(HemicubeAccuracy, SeparatedOccluderStillOccludes) {
+  // A card floating 0.2 above a receiver hides part of it from the point below: their depth ranges in every
+  // pixel are far apart, so the layer rule does not apply and the walk is the paper's E = A (1 - f).
+  // Both are cut into pieces that meet inside pixels, so the pieces of each form layers of their own.
+  ReceiverView view;
+  add_surface(view, grid({-0.5, -0.5, 1.0}, {0, 1, 0}, {1, 0, 0}, 7, 7), 0, 0);           // receiver at z = 1
+  add_surface(view, grid({-0.5, -0.5, 0.8}, {0, 0.6, 0}, {0.45, 0, 0}, 5, 5), 1, 100);    // occluder at z = 0.8
+  const Shooter up = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
+  // The visible part of the receiver: the unit square at z = 1 minus the occluder's shadow from the origin,
+  // x in [-0.5, -0.05] and y in [-0.5, 0.1] scaled by 1 / 0.8, clipped to the square: [-0.5, -0.0625] x [-0.5, 0.125].
+  const double whole = polygon_form_factor(Vec3(0), Vec3(0, 0, 1), rectangle({-0.5, -0.5, 1}, {0, 1, 0}, {1, 0, 0}));
+  const double shadow =
+      polygon_form_factor(Vec3(0), Vec3(0, 0, 1), rectangle({-0.5, -0.5, 1}, {0, 0.625, 0}, {0.4375, 0, 0}));
+  const double card = polygon_form_factor(Vec3(0), Vec3(0, 0, 1), rectangle({-0.5, -0.5, 0.8}, {0, 0.6, 0}, {0.45, 0, 0}));
+  AaHemicubeBackend aa(100);
+  const std::vector<double> f = run(aa, up, view);
+  double receiver = 0.0, occluder = 0.0;
+  for (std::size_t i = 0; i < f.size(); ++i) (view.surface(i) == 0 ? receiver : occluder) += f[i];
+  EXPECT_LT(relative_error(receiver, whole - shadow), 0.01) << receiver << " " << whole - shadow;
+  EXPECT_LT(relative_error(occluder, card), 0.005) << occluder << " " << card;
 }
 
 TEST(HemicubeAccuracy, SameNumbersWithOneAndTwoThreads) {
