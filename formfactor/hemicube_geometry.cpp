@@ -164,16 +164,6 @@ bool faces_point(const Plane& plane, const Vec3& centre) {
 
 namespace {
 
-// Outcode bits of one face for a point in that face's coordinates. fl(a - l) < 0 exactly when a < l.
-inline std::uint32_t face_outcode(bool top, const Vec3& f) {
-  std::uint32_t code = 0;
-  if (f.x - f.y < 0.0) code |= 1u;
-  if (f.x + f.y < 0.0) code |= 2u;
-  if (f.x - f.z < 0.0) code |= 4u;
-  if ((top ? f.x + f.z : f.z) < 0.0) code |= 8u;
-  return code;
-}
-
 // Value of plane k of a face at a point in face coordinates; the face keeps value >= 0.
 inline double plane_value(bool top, int k, const Vec3& f) {
   switch (k) {
@@ -211,12 +201,16 @@ inline Vec3 crossing(bool top, int k, const Vec3& p, double vp, const Vec3& q, d
 }  // namespace
 
 std::uint32_t frustum_outcode(const Vec3& local) {
-  std::uint32_t code = 0;
-  for (int f = 0; f < kHemicubeFaces; ++f) {
-    const auto face = static_cast<HemicubeFace>(f);
-    code |= face_outcode(face == HemicubeFace::kTop, to_face(face, local)) << (4 * f);
-  }
-  return code;
+  // face_outcode of every face, written out on (u, v, w): the same differences as through to_face, so the same
+  // exact signs, without the per-face shuffle (this runs for every vertex of every receiver in every shot).
+  const double u = local.x, v = local.y, w = local.z;
+  const auto bit = [](double x, int k) { return static_cast<std::uint32_t>(x < 0.0) << k; };
+  const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0);
+  return bit(w - u, 0) | bit(w + u, 1) | bit(w - v, 2) | bit(w + v, 3) |        // top: a = w, l1 = u, l2 = v
+         bit(u - v, 4) | bit(u + v, 5) | bit(u - w, 6) | below << 7 |            // +u: a = u, l1 = v, l2 = w
+         bit(-u - v, 8) | bit(-u + v, 9) | bit(-u - w, 10) | below << 11 |       // -u: a = -u, l1 = v, l2 = w
+         bit(v - u, 12) | bit(v + u, 13) | bit(v - w, 14) | below << 15 |        // +v: a = v, l1 = u, l2 = w
+         bit(-v - u, 16) | bit(-v + u, 17) | bit(-v - w, 18) | below << 19;      // -v: a = -v, l1 = u, l2 = w
 }
 
 std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face, std::uint32_t outside_mask,
@@ -281,6 +275,10 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const std::span<const Vec3> polygon = receivers.polygon(i);
+      if (front_[i] == 0 || polygon.size() < 3) {
+        face_mask_[i] = 0;  // culled: no face looks at its local coordinates
+        continue;
+      }
       std::uint32_t all = ~0u, any = 0u;
       for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
         const Vec3 q = to_local(shooter, receivers.vertices()[v]);
@@ -293,10 +291,8 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
       outside_[i] = any;
       local_planes_[i] = plane_to_local(shooter, receivers.plane(i));
       std::uint8_t mask = 0;
-      if (front_[i] != 0 && polygon.size() >= 3) {
-        for (int f = 0; f < kHemicubeFaces; ++f)
-          if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
-      }
+      for (int f = 0; f < kHemicubeFaces; ++f)
+        if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
       face_mask_[i] = mask;
     }
   });

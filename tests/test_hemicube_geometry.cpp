@@ -86,6 +86,35 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
   EXPECT_FALSE(faces_point(Plane{{0, 0, -1}, 1.0}, Vec3(0, 0, 1.0)));
 }
 
+TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
+  // Bit 4 f + k of frustum_outcode is set exactly when the point is outside plane k of face f, in that face's
+  // coordinates (a, l1, l2): a - l1, a + l1, a - l2, and a + l2 on the top or l2 on a side, negative. Points on
+  // the planes (a == +-l) and on the horizon (w == 0, +-0.0) included.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 2000; ++i) points.push_back({uniform(rng), uniform(rng), uniform(rng)});
+  for (double a : {-0.5, 0.0, -0.0, 0.5})
+    for (double b : {-0.5, 0.0, -0.0, 0.5}) {
+      points.push_back({a, b, 0.0});
+      points.push_back({a, a, b});
+      points.push_back({a, -a, b});
+      points.push_back({b, a, a});
+      points.push_back({b, a, -a});
+      points.push_back({a, b, a});
+    }
+  for (const Vec3& q : points) {
+    const std::uint32_t code = frustum_outcode(q);
+    for (int f = 0; f < kHemicubeFaces; ++f) {
+      const auto face = static_cast<HemicubeFace>(f);
+      const Vec3 p = to_face(face, q);
+      const bool top = face == HemicubeFace::kTop;
+      const bool outside[4] = {p.x - p.y < 0.0, p.x + p.y < 0.0, p.x - p.z < 0.0, (top ? p.x + p.z : p.z) < 0.0};
+      for (int k = 0; k < 4; ++k) EXPECT_EQ(((code >> (4 * f + k)) & 1u) != 0, outside[k]) << f << " " << k;
+    }
+  }
+}
+
 // Clips a polygon (local coordinates) to every face and returns the face pieces back in local coordinates.
 std::vector<Polygon> clip_to_all_faces(const Polygon& local) {
   std::vector<Polygon> pieces;
