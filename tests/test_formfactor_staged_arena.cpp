@@ -1,7 +1,7 @@
 // The staged coverage arena of the AA hemicube (formfactor/coverage_list.h) builds, block by block, the same
 // per-pixel lists as the immediate CoverageArena (Chandran, Kiran, Phani and Rai, section 3.2.1: lists sorted on
-// insertion, same-surface groups, full pixels): the same entries in the same order give the same walk, value for
-// value, whatever the number of column blocks.
+// insertion, same-surface groups, layers of overlapping depth ranges, full pixels): the same entries in the same
+// order give the same walk, value for value, whatever the number of column blocks.
 #include "formfactor/coverage_list.h"
 
 #include <gtest/gtest.h>
@@ -31,7 +31,9 @@ TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
         // Few pixels per receiver overlap at low resolution; draw depths from a few planes so ties occur.
         const double depth = std::floor(u(rng) * 8.0) + (u(rng) < 0.5 ? 0.0 : 0.5);
         const double coverage = u(rng) < 0.4 ? 1.0 : (u(rng) < 0.5 ? 0.5 : u(rng));
-        const CoverageEntry entry{depth, coverage, r, static_cast<std::uint32_t>(u(rng) * 6)};
+        // Half the entries with a depth spread that reaches the neighbouring planes: layers in the walk.
+        const float spread = u(rng) < 0.5 ? 0.0f : 0.3f;
+        const CoverageEntry entry{depth, coverage, r, static_cast<std::uint32_t>(u(rng) * 6), spread};
         immediate.insert(static_cast<std::size_t>(x) * height + y, entry);
         staged.insert(x, y, entry);
       }
