@@ -10,6 +10,7 @@
 namespace aarad::formfactor {
 
 AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {
+  tasks_ = face_tasks(geometry_.resolution());
   for (int f = 0; f < kHemicubeFaces; ++f) {
     const auto face = static_cast<HemicubeFace>(f);
     const int width = geometry_.width(face), height = geometry_.height(face);
@@ -24,15 +25,18 @@ AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {
 
 std::size_t AaHemicubeBackend::last_entries() const {
   std::size_t sum = 0;
-  for (std::size_t n : face_entries_) sum += n;
+  for (std::size_t n : task_entries_) sum += n;
   return sum;
 }
 
-void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receivers, std::size_t max_vertices,
+void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices,
                                    FaceBuffers& b, std::vector<double>& sums) {
-  const int width = geometry_.width(face), height = geometry_.height(face);
-  const double half = 0.5 * geometry_.resolution();
-  std::unique_ptr<AreaRasterizer>& raster = face == HemicubeFace::kTop ? b.top : b.side;
+  const FaceTask& t = tasks_[static_cast<std::size_t>(task)];
+  const HemicubeFace face = t.face;
+  // The task's viewport: columns [t.x0, t.x1) of the face, shifted to start at 0.
+  const int width = t.x1 - t.x0, height = geometry_.height(face);
+  const double half = 0.5 * geometry_.resolution(), shift = t.x0;
+  std::unique_ptr<AreaRasterizer>& raster = b.raster[static_cast<std::size_t>(task)];
   if (!raster) raster = std::make_unique<AreaRasterizer>(width, height);
   b.arena.reset(width, height);
   b.scratch.resize(clipped_capacity(max_vertices));
@@ -45,7 +49,8 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
   std::size_t offered = 0;
 
   for (std::size_t i = 0; i < receivers.size(); ++i) {
-    if ((prepared_.face_mask(i) & bit) == 0) continue;
+    if ((prepared_.face_mask(i) & bit) == 0 || !may_reach(t, geometry_.resolution(), prepared_.local_polygon(i)))
+      continue;
     const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
     if (m == 0) continue;
     double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
@@ -57,7 +62,8 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
         degenerate = true;
         break;
       }
-      const Vec2 p = project_to_pixels(face, f, half);
+      Vec2 p = project_to_pixels(face, f, half);
+      p.x -= shift;
       b.projected[k] = p;
       x0 = std::min(x0, p.x);
       x1 = std::max(x1, p.x);
@@ -66,8 +72,9 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
       lo = std::min(lo, 1.0 / f.x);
       hi = std::max(hi, 1.0 / f.x);
     }
-    if (degenerate) continue;
-    const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
+    if (degenerate || !(x1 > 0.0 && x0 < width)) continue;  // nothing in this task's columns
+    InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
+    depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const auto receiver = static_cast<std::uint32_t>(i);
     const std::uint32_t surface = receivers.surface(i);
     // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is taken at one point of the
@@ -89,9 +96,9 @@ void AaHemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiv
       arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface, spread});
     });
   }
-  face_entries_[static_cast<std::size_t>(face)] = offered;
+  task_entries_[static_cast<std::size_t>(task)] = offered;
   // Walk every list front to back, in the arena's column-major order.
-  const std::vector<double>& weight = column_weight_[static_cast<std::size_t>(face)];
+  const double* weight = column_weight_[static_cast<std::size_t>(face)].data() + static_cast<std::size_t>(t.x0) * height;
   // Consecutive contributions of one receiver (its interior runs down a column) are summed in a register and
   // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
   std::uint32_t run_receiver = 0;
@@ -114,12 +121,11 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
   prepared_.prepare(shooter, receivers);
   std::size_t max_vertices = 3;
   for (std::size_t i = 0; i < receivers.size(); ++i) max_vertices = std::max(max_vertices, receivers.polygon(i).size());
-  for (auto& sums : face_sums_) sums.assign(receivers.size(), 0.0);
-  tbb::parallel_for(0, kHemicubeFaces, [&](int f) {
-    shoot_face(static_cast<HemicubeFace>(f), receivers, max_vertices, buffers_.local(),
-               face_sums_[static_cast<std::size_t>(f)]);
+  for (auto& sums : task_sums_) sums.assign(receivers.size(), 0.0);
+  tbb::parallel_for(0, kTasks, [&](int task) {
+    shoot_task(task, receivers, max_vertices, buffers_.local(), task_sums_[static_cast<std::size_t>(task)]);
   });
-  combine_face_sums(face_sums_, subset, out);
+  combine_face_sums(task_sums_, subset, out);
 }
 
 }  // namespace aarad::formfactor

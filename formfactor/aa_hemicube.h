@@ -1,8 +1,9 @@
 // The anti-aliased hemicube: Chandran, Kiran, Phani and Rai, "Anti-aliased hemicubes for radiosity",
 // section 3.2. Every receiver facing the shooter is clipped to each face's frustum (hemicube_geometry.h),
 // projected, and scan-converted with the exact area rasterizer of the paper's Figure 4 (core/area_rasterizer.h);
-// every pixel keeps a depth-sorted list of (receiver, A, depth, surface) (coverage_list.h); walking each list
-// front to back, a receiver gets E_k = A_k (1 - f_{k-1}) of the pixel's delta form factor.
+// every pixel keeps a depth-sorted list of (receiver, A, depth, spread, surface) (coverage_list.h); walking each
+// list front to back, a receiver gets E_k = A_k (1 - f_{k-1}) of the pixel's delta form factor, and receivers
+// that meet inside the pixel share it side by side (coverage_list.h, "Layers").
 //
 // The depth kept per receiver and pixel is the distance along the face axis at which the ray through one
 // point of the pixel meets the receiver's plane: the pixel centre moved into the receiver's clipped bounding
@@ -14,8 +15,10 @@
 // physical surface are grouped by surface id, not by comparing depths, so coplanar pieces never occlude each
 // other whatever rounding does to their planes.
 //
-// Parallel over the five faces (one arena and rasterizer per thread); the per-face partial sums are added in
-// face order, so the numbers do not depend on the number of threads.
+// Parallel over six tasks: the top face cut into its left and right column halves, and the four side faces, so
+// that every task has as many pixels as a side face and two threads share the work evenly (one arena per
+// thread, one rasterizer per task and thread). The per-task partial sums are added in task order, so the numbers
+// do not depend on the number of threads.
 #pragma once
 
 #include "core/area_rasterizer.h"
@@ -44,21 +47,23 @@ class AaHemicubeBackend final : public FormFactorBackend {
   std::size_t last_entries() const;
 
  private:
+  static constexpr int kTasks = kFaceTasks;
   struct FaceBuffers {
-    std::unique_ptr<AreaRasterizer> top, side;
+    std::array<std::unique_ptr<AreaRasterizer>, kTasks> raster;  // per task: its width x height viewport
     StagedCoverageArena arena;
     std::vector<Vec3> scratch, clipped;
     std::vector<Vec2> projected;
   };
-  void shoot_face(HemicubeFace face, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,
+  void shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,
                   std::vector<double>& sums);
 
   HemicubeGeometry geometry_;
   // Delta form factors of every face in the arena's column-major order (pixel (x, y) at x * height + y).
   std::array<std::vector<double>, kHemicubeFaces> column_weight_;
   PreparedReceivers prepared_;
-  std::array<std::vector<double>, kHemicubeFaces> face_sums_;
-  std::array<std::size_t, kHemicubeFaces> face_entries_{};
+  std::array<FaceTask, kTasks> tasks_;
+  std::array<std::vector<double>, kTasks> task_sums_;
+  std::array<std::size_t, kTasks> task_entries_{};
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;
 };
 

@@ -13,10 +13,12 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
-void HemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receivers, std::size_t max_vertices,
+void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& receivers, std::size_t max_vertices,
                                  FaceBuffers& b, std::vector<double>& sums) const {
-  const int width = geometry_.width(face), height = geometry_.height(face);
-  const std::size_t pixels = geometry_.pixels(face);
+  const HemicubeFace face = task.face;
+  // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
+  const int face_width = geometry_.width(face), width = task.x1 - task.x0, height = geometry_.height(face);
+  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   const double half = 0.5 * geometry_.resolution();
   b.inverse_depth.assign(pixels, 0.0);
   b.item.assign(pixels, kNoItem);
@@ -28,10 +30,12 @@ void HemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiver
   auto sample_y = [this, face](int row) { return geometry_.sample_y(face, row); };
 
   for (std::size_t i = 0; i < receivers.size(); ++i) {
-    if ((prepared_.face_mask(i) & bit) == 0) continue;
+    if ((prepared_.face_mask(i) & bit) == 0 || !may_reach(task, geometry_.resolution(), prepared_.local_polygon(i)))
+      continue;
     const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
     if (m == 0) continue;
     double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    double x_min = lo, x_max = -lo;
     bool degenerate = false;
     for (std::size_t k = 0; k < m; ++k) {
       const Vec3& f = b.clipped[k];
@@ -40,19 +44,22 @@ void HemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiver
         break;
       }
       b.projected[k] = project_to_pixels(face, f, half);
+      x_min = std::min(x_min, b.projected[k].x);
+      x_max = std::max(x_max, b.projected[k].x);
       lo = std::min(lo, 1.0 / f.x);
       hi = std::max(hi, 1.0 / f.x);
     }
-    if (degenerate) continue;
+    // No sample x + 1/2 of the task's columns in [x_min, x_max): nothing to do here.
+    if (degenerate || x_max <= task.x0 + 0.5 || x_min > task.x1 - 0.5) continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const auto item = static_cast<std::uint32_t>(i);
-    sample_polygon(std::span<const Vec2>(b.projected.data(), m), width, height, sample_y, b.crossings,
+    sample_polygon(std::span<const Vec2>(b.projected.data(), m), task.x0, task.x1, height, sample_y, b.crossings,
                    [&](int x, int y) {
                      // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
                      double z = depth.at(x + 0.5, sample_y(y));
                      if (!(z >= lo)) z = lo;
                      if (z > hi) z = hi;
-                     const std::size_t p = static_cast<std::size_t>(y) * width + x;
+                     const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
                      if (z > b.inverse_depth[p]) {
                        b.inverse_depth[p] = z;
                        b.item[p] = item;
@@ -60,8 +67,12 @@ void HemicubeBackend::shoot_face(HemicubeFace face, const ReceiverView& receiver
                    });
   }
   const std::span<const double> delta = geometry_.delta(face);
-  for (std::size_t p = 0; p < pixels; ++p)
-    if (b.item[p] != kNoItem) sums[b.item[p]] += delta[p];
+  for (int y = 0; y < height; ++y) {
+    const std::uint32_t* item = &b.item[static_cast<std::size_t>(y) * width];
+    const double* row = &delta[static_cast<std::size_t>(y) * face_width + task.x0];
+    for (int x = 0; x < width; ++x)
+      if (item[x] != kNoItem) sums[item[x]] += row[x];
+  }
 }
 
 void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
@@ -69,12 +80,13 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   prepared_.prepare(shooter, receivers);
   std::size_t max_vertices = 3;
   for (std::size_t i = 0; i < receivers.size(); ++i) max_vertices = std::max(max_vertices, receivers.polygon(i).size());
-  for (auto& sums : face_sums_) sums.assign(receivers.size(), 0.0);
-  tbb::parallel_for(0, kHemicubeFaces, [&](int f) {
-    shoot_face(static_cast<HemicubeFace>(f), receivers, max_vertices, buffers_.local(),
-               face_sums_[static_cast<std::size_t>(f)]);
+  for (auto& sums : task_sums_) sums.assign(receivers.size(), 0.0);
+  const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
+  tbb::parallel_for(0, kFaceTasks, [&](int t) {
+    shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(),
+               task_sums_[static_cast<std::size_t>(t)]);
   });
-  combine_face_sums(face_sums_, subset, out);
+  combine_face_sums(task_sums_, subset, out);
 }
 
 }  // namespace aarad::formfactor

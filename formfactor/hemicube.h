@@ -25,14 +25,15 @@ struct ScanCrossing {
   int direction;
 };
 
-// Point-sampling scan conversion with a consistent fill rule. Calls visit(x, y) for every pixel of a
-// width x height grid whose sample point (x + 1/2, sample_y(y)) lies inside `polygon` (either winding; the
+// Point-sampling scan conversion with a consistent fill rule. Calls visit(x, y) for every pixel of columns
+// [column_begin, column_end) and rows [0, height) whose sample point (x + 1/2, sample_y(y)) lies inside `polygon`
+// (either winding; the
 // non-zero winding rule). A sample point on an edge belongs to the polygon on the edge's right in x, or above
 // it for a horizontal edge (half-open spans [x_left, x_right) and edges [y_low, y_high)): of two polygons
 // sharing an edge exactly one takes it. Crossings are computed from each edge's endpoints in canonical order,
 // so both polygons compute the same x. `crossings` needs room for polygon.size() entries.
 template <class SampleY, class Visit>
-void sample_polygon(std::span<const Vec2> polygon, int width, int height, SampleY&& sample_y,
+void sample_polygon(std::span<const Vec2> polygon, int column_begin, int column_end, int height, SampleY&& sample_y,
                     std::span<ScanCrossing> crossings, Visit&& visit) {
   const std::size_t m = polygon.size();
   if (m < 3) return;
@@ -69,8 +70,8 @@ void sample_polygon(std::span<const Vec2> polygon, int width, int height, Sample
       winding += crossings[k].direction;
       if (winding == 0) continue;
       // Columns whose centre c + 1/2 lies in [x_k, x_{k+1}); x - 1/2 is exact for |x| < 2^52.
-      const int c0 = std::max(0, static_cast<int>(std::ceil(crossings[k].x - 0.5)));
-      const int c1 = std::min(width, static_cast<int>(std::ceil(crossings[k + 1].x - 0.5)));
+      const int c0 = std::max(column_begin, static_cast<int>(std::ceil(crossings[k].x - 0.5)));
+      const int c1 = std::min(column_end, static_cast<int>(std::ceil(crossings[k + 1].x - 0.5)));
       for (int c = c0; c < c1; ++c) visit(c, row);
     }
   }
@@ -95,12 +96,12 @@ class HemicubeBackend final : public FormFactorBackend {
     std::vector<Vec2> projected;
     std::vector<ScanCrossing> crossings;
   };
-  void shoot_face(HemicubeFace face, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,
-                  std::vector<double>& sums) const;
+  void shoot_task(const FaceTask& task, const ReceiverView& receivers, std::size_t max_vertices,
+                  FaceBuffers& buffers, std::vector<double>& sums) const;
 
   HemicubeGeometry geometry_;
   PreparedReceivers prepared_;
-  std::array<std::vector<double>, kHemicubeFaces> face_sums_;
+  std::array<std::vector<double>, kFaceTasks> task_sums_;
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;
 };
 

@@ -104,8 +104,8 @@ double HemicubeGeometry::total() const {
   return sum;
 }
 
-void combine_face_sums(const std::array<std::vector<double>, kHemicubeFaces>& face_sums,
-                       std::span<const std::uint32_t> subset, std::span<double> out) {
+void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span<const std::uint32_t> subset,
+                       std::span<double> out) {
   auto combine = [&](std::size_t i) {
     double sum = 0.0;
     for (const std::vector<double>& face : face_sums) sum += face[i];

@@ -176,10 +176,38 @@ class PreparedReceivers {
   std::vector<std::uint8_t> front_;
 };
 
-// out[i] = the five faces' partial sums added in face order (deterministic whatever the thread count), for
-// every i of `subset` (every receiver when it is empty).
-void combine_face_sums(const std::array<std::vector<double>, kHemicubeFaces>& face_sums,
-                       std::span<const std::uint32_t> subset, std::span<double> out);
+// Columns [x0, x1) of one face: the unit of parallel work of both hemicubes. The top face has twice the pixels of
+// a side face, so it is cut into its left and right column halves: six tasks of a side face's size, which two
+// threads share evenly (five faces did not: the top face alone took as long as the four sides).
+struct FaceTask {
+  HemicubeFace face;
+  int x0, x1;
+};
+inline constexpr int kFaceTasks = kHemicubeFaces + 1;
+inline std::array<FaceTask, kFaceTasks> face_tasks(int resolution) {
+  const int n = resolution;
+  return {FaceTask{HemicubeFace::kTop, 0, n / 2}, FaceTask{HemicubeFace::kTop, n / 2, n},
+          FaceTask{HemicubeFace::kPosU, 0, n},    FaceTask{HemicubeFace::kNegU, 0, n},
+          FaceTask{HemicubeFace::kPosV, 0, n},    FaceTask{HemicubeFace::kNegV, 0, n}};
+}
+
+// Whether a receiver (its vertices in local coordinates) may cover part of the task's columns: a cheap test before
+// clipping. The top face's column x = (u / w + 1) N / 2 splits at u = 0 for even N, and clipping keeps u within
+// the vertices' range (new vertices lie on edges), so a receiver with u > 0 at every vertex has nothing in the left
+// half, and one with u < 0 everywhere nothing in the right half (even N; odd N splits off the axis).
+inline bool may_reach(const FaceTask& task, int resolution, std::span<const Vec3> local_polygon) {
+  if (task.face != HemicubeFace::kTop) return true;
+  const bool left = task.x0 == 0;
+  if (!left && resolution % 2 != 0) return true;
+  for (const Vec3& q : local_polygon)
+    if (left ? !(q.x > 0.0) : !(q.x < 0.0)) return true;
+  return false;
+}
+
+// out[i] = the partial sums of the faces (or of a back end's tasks) added in order (deterministic whatever the
+// thread count), for every i of `subset` (every receiver when it is empty).
+void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span<const std::uint32_t> subset,
+                       std::span<double> out);
 
 // Checks a resolution for the back ends; throws aarad::Error naming the accepted range.
 void check_resolution(int resolution);
