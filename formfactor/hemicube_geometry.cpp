@@ -58,7 +58,6 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
       }
     }
   }
-  weight_[0] = top;
 
   // Side faces: identical tables (the four faces are congruent), row r = height above the base.
   std::vector<double> side(static_cast<std::size_t>(n) * side_rows_, 0.0);
@@ -83,12 +82,8 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
       }
     }
   }
-  std::vector<double> side_weight = side;
-  for (int r = 0; r < side_rows_; ++r)
-    for (int i = 0; i < n; ++i) side_weight[static_cast<std::size_t>(r) * n + i] /= fraction[static_cast<std::size_t>(r)];
   for (int f = 1; f < kHemicubeFaces; ++f) {
     delta_[static_cast<std::size_t>(f)] = side;
-    weight_[static_cast<std::size_t>(f)] = side_weight;
   }
 }
 

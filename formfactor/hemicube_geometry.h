@@ -75,9 +75,6 @@ class HemicubeGeometry {
   // Delta form factor of every pixel of a face, row y at offset y * width: the form factor of the part of the
   // pixel inside the face. The five tables sum to 1 (kExactCell) or to 1 + O(1 / N^2) (kMidpoint).
   std::span<const double> delta(HemicubeFace face) const { return delta_[index(face)]; }
-  // Delta form factor per unit of pixel coverage: delta / (fraction of the pixel inside the face). Equal to
-  // delta except in the half row of a side face for odd N.
-  std::span<const double> coverage_weight(HemicubeFace face) const { return weight_[index(face)]; }
   // y (pixel units) at which the classical hemicube samples row `row` of a face: row + 1/2, or the centre of
   // the inside half for the half row.
   double sample_y(HemicubeFace face, int row) const {
@@ -94,7 +91,6 @@ class HemicubeGeometry {
   int side_rows_;
   double half_row_sample_y_;
   std::array<std::vector<double>, kHemicubeFaces> delta_;
-  std::array<std::vector<double>, kHemicubeFaces> weight_;
 };
 
 // Local coordinates (u, v, w) of p in the shooter's frame. The sign of w is made exactly the sign of
