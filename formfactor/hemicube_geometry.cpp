@@ -61,8 +61,6 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
 
   // Side faces: identical tables (the four faces are congruent), row r = height above the base.
   std::vector<double> side(static_cast<std::size_t>(n) * side_rows_, 0.0);
-  std::vector<double> fraction(static_cast<std::size_t>(side_rows_), 1.0);
-  if (odd) fraction.back() = 0.5;
   if (rule_ == DeltaRule::kExactCell) {
     std::vector<double> corner(static_cast<std::size_t>(n + 1) * (side_rows_ + 1));
     for (int r = 0; r <= side_rows_; ++r)
