@@ -40,6 +40,7 @@ Shot make_shot(const std::string& scene_name, std::size_t target, const std::str
   for (const Face& f : scene.faces) total_area += area(f.vertices);
   const double element_area = total_area / static_cast<double>(target);
   Shot shot;
+  std::uint32_t base = 0;  // keys of the current triangle's lattice points: base + i (m + 1) + j
   for (std::uint32_t fi = 0; fi < scene.faces.size(); ++fi) {
     const Face& face = scene.faces[fi];
     const Plane plane = scene.surfaces[face.surface].plane;
@@ -48,16 +49,21 @@ Shot make_shot(const std::string& scene_name, std::size_t target, const std::str
       const double tri_area = 0.5 * glm::length(glm::cross(b - a, c - a));
       const int m = std::max(1, static_cast<int>(std::lround(std::sqrt(tri_area / element_area))));
       const Vec3 u = (b - a) / double(m), v = (c - a) / double(m);
+      // Lattice point (i, j) and its key: elements share their vertices, as the solver's receivers do.
+      const auto at = [&](int i, int j) { return a + double(i) * u + double(j) * v; };
+      const auto key = [&](int i, int j) { return base + static_cast<std::uint32_t>(i * (m + 1) + j); };
       for (int i = 0; i < m; ++i)
         for (int j = 0; i + j < m; ++j) {
-          const Vec3 p = a + double(i) * u + double(j) * v;
-          const Vec3 up[3] = {p, p + u, p + v};
-          shot.receivers.add(up, plane, face.surface, fi);
+          const Vec3 up[3] = {at(i, j), at(i + 1, j), at(i, j + 1)};
+          const std::uint32_t up_keys[3] = {key(i, j), key(i + 1, j), key(i, j + 1)};
+          shot.receivers.add(up, up_keys, plane, face.surface, fi);
           if (i + j + 1 < m) {
-            const Vec3 down[3] = {p + u, p + u + v, p + v};
-            shot.receivers.add(down, plane, face.surface, fi);
+            const Vec3 down[3] = {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)};
+            const std::uint32_t down_keys[3] = {key(i + 1, j), key(i + 1, j + 1), key(i, j + 1)};
+            shot.receivers.add(down, down_keys, plane, face.surface, fi);
           }
         }
+      base += static_cast<std::uint32_t>((m + 1) * (m + 1));
     }
   }
   const Group& light = scene.groups[*scene.find_group(light_group)];

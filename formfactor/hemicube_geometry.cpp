@@ -256,28 +256,38 @@ InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, double h
 
 void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
   const std::size_t count = receivers.size();
+  const std::span<const Vec3> points = receivers.points();
+  const std::span<const std::uint32_t> corner_points = receivers.corner_points();
   offsets_ = receivers.offsets();
+  point_local_.resize(points.size());
+  point_code_.resize(points.size());
   local_.resize(receivers.vertices().size());
-  outcode_.resize(receivers.vertices().size());
   outside_.resize(count);
   face_mask_.resize(count);
   local_planes_.resize(count);
 
   cull_back_faces(shooter.centre, receivers, patch_state_, front_);
 
+  // Every point once (a vertex is a corner of up to four elements), then every receiver gathers its corners.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t p = range.begin(); p != range.end(); ++p) {
+                        const Vec3 q = to_local(shooter, points[p]);
+                        point_local_[p] = q;
+                        point_code_[p] = frustum_outcode(q);
+                      }
+                    });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::span<const Vec3> polygon = receivers.polygon(i);
-      if (front_[i] == 0 || polygon.size() < 3) {
+      if (front_[i] == 0 || offsets_[i + 1] - offsets_[i] < 3) {
         face_mask_[i] = 0;  // culled: no face looks at its local coordinates
         continue;
       }
       std::uint32_t all = ~0u, any = 0u;
       for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
-        const Vec3 q = to_local(shooter, receivers.vertices()[v]);
-        local_[v] = q;
-        const std::uint32_t code = frustum_outcode(q);
-        outcode_[v] = code;
+        const std::uint32_t point = corner_points[v];
+        local_[v] = point_local_[point];
+        const std::uint32_t code = point_code_[point];
         all &= code;
         any |= code;
       }
@@ -289,7 +299,6 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
       face_mask_[i] = mask;
     }
   });
-
 }
 
 void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,

@@ -163,8 +163,9 @@ class PreparedReceivers {
 
  private:
   std::span<const std::uint32_t> offsets_;
-  std::vector<Vec3> local_;
-  std::vector<std::uint32_t> outcode_;
+  std::vector<Vec3> point_local_;           // per point of the view: local coordinates
+  std::vector<std::uint32_t> point_code_;   // per point: frustum_outcode
+  std::vector<Vec3> local_;                 // per corner: its point's local coordinates
   std::vector<std::uint32_t> outside_;
   std::vector<std::uint8_t> face_mask_;
   std::vector<Plane> local_planes_;

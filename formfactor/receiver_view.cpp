@@ -1,5 +1,10 @@
 #include "formfactor/receiver_view.h"
 
+#include "core/error.h"
+
+#include <algorithm>
+#include <string>
+
 namespace aarad::formfactor {
 
 void ReceiverView::clear() {
@@ -8,6 +13,9 @@ void ReceiverView::clear() {
   planes_.clear();
   surfaces_.clear();
   patches_.clear();
+  points_.clear();
+  corner_points_.clear();
+  point_of_key_.clear();
 }
 
 void ReceiverView::reserve(std::size_t receivers, std::size_t vertices) {
@@ -16,10 +24,41 @@ void ReceiverView::reserve(std::size_t receivers, std::size_t vertices) {
   planes_.reserve(receivers);
   surfaces_.reserve(receivers);
   patches_.reserve(receivers);
+  points_.reserve(vertices);
+  corner_points_.reserve(vertices);
 }
 
 std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
                                 std::uint32_t patch) {
+  for (const Vec3& p : polygon) {
+    corner_points_.push_back(static_cast<std::uint32_t>(points_.size()));
+    points_.push_back(p);
+  }
+  return append(polygon, plane, surface, patch);
+}
+
+std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const std::uint32_t> keys, const Plane& plane,
+                                std::uint32_t surface, std::uint32_t patch) {
+  if (keys.size() != polygon.size())
+    throw Error("ReceiverView::add: " + std::to_string(keys.size()) + " keys for " + std::to_string(polygon.size()) +
+                " corners");
+  for (std::size_t k = 0; k < polygon.size(); ++k) {
+    const std::size_t key = keys[k];
+    if (key >= point_of_key_.size()) point_of_key_.resize(std::max(key + 1, 2 * point_of_key_.size()), kNoPoint);
+    std::uint32_t& point = point_of_key_[key];
+    if (point == kNoPoint) {
+      point = static_cast<std::uint32_t>(points_.size());
+      points_.push_back(polygon[k]);
+    } else if (points_[point] != polygon[k]) {
+      throw Error("ReceiverView::add: key " + std::to_string(key) + " names two different points");
+    }
+    corner_points_.push_back(point);
+  }
+  return append(polygon, plane, surface, patch);
+}
+
+std::uint32_t ReceiverView::append(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
+                                   std::uint32_t patch) {
   vertices_.insert(vertices_.end(), polygon.begin(), polygon.end());
   offsets_.push_back(static_cast<std::uint32_t>(vertices_.size()));
   planes_.push_back(plane);

@@ -15,12 +15,22 @@ namespace aarad::formfactor {
 // counter-clockwise seen from its front side (the side planes[i].normal points to).
 // surface[i] is its physical-surface id (pieces of one surface never occlude each other);
 // patch[i] is its parent patch id (back-face culling is decided per patch, as the paper does).
+//
+// Shared points. Every corner also names a point of points(): corners of neighbouring receivers that are the
+// same vertex name the same point, so a back end can transform each point once per shot instead of once per
+// corner (a vertex of a grid of elements is a corner of four of them). add() without keys gives every corner
+// a point of its own.
 class ReceiverView {
  public:
   void clear();
   void reserve(std::size_t receivers, std::size_t vertices);
   // Appends a receiver and returns its index.
   std::uint32_t add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface, std::uint32_t patch);
+  // The same, with a caller's key per corner (keys[k] for polygon[k]): corners with equal keys share one point.
+  // Equal keys must come with equal coordinates (checked: throws aarad::Error otherwise). Keys are small
+  // integers, such as vertex indices of a mesh: the view keeps a table as long as the largest key.
+  std::uint32_t add(std::span<const Vec3> polygon, std::span<const std::uint32_t> keys, const Plane& plane,
+                    std::uint32_t surface, std::uint32_t patch);
 
   std::size_t size() const { return planes_.size(); }
   std::span<const Vec3> polygon(std::size_t i) const {
@@ -32,16 +42,25 @@ class ReceiverView {
 
   std::span<const Vec3> vertices() const { return vertices_; }
   std::span<const std::uint32_t> offsets() const { return offsets_; }
+  // The distinct points, and for every corner (index into vertices()) the point it is.
+  std::span<const Vec3> points() const { return points_; }
+  std::span<const std::uint32_t> corner_points() const { return corner_points_; }
   std::span<const Plane> planes() const { return planes_; }
   std::span<const std::uint32_t> surfaces() const { return surfaces_; }
   std::span<const std::uint32_t> patches() const { return patches_; }
 
  private:
+  std::uint32_t append(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface, std::uint32_t patch);
+
   std::vector<Vec3> vertices_;
   std::vector<std::uint32_t> offsets_{0};
   std::vector<Plane> planes_;
   std::vector<std::uint32_t> surfaces_;
   std::vector<std::uint32_t> patches_;
+  std::vector<Vec3> points_;
+  std::vector<std::uint32_t> corner_points_;  // per corner: index into points_
+  std::vector<std::uint32_t> point_of_key_;   // per caller key: index into points_, or kNoPoint
+  static constexpr std::uint32_t kNoPoint = 0xFFFFFFFFu;
 };
 
 }  // namespace aarad::formfactor

@@ -201,6 +201,12 @@ void Hierarchy::corners(NodeId node, std::vector<Vec3>& out) const {
   const int n = impl_->corner_count(node);
   for (int k = 0; k < n; ++k) out.push_back(impl_->point(impl_->corners[node][static_cast<std::size_t>(k)]));
 }
+std::array<std::uint32_t, 4> Hierarchy::corner_vertices(NodeId node) const {
+  std::array<std::uint32_t, 4> ids{};
+  const int n = impl_->corner_count(node);
+  for (int k = 0; k < n; ++k) ids[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(impl_->corners[node][static_cast<std::size_t>(k)]);
+  return ids;
+}
 std::vector<Vec3> Hierarchy::corners(NodeId node) const {
   std::vector<Vec3> out;
   corners(node, out);

@@ -63,6 +63,9 @@ class Hierarchy {
   std::vector<Vec3> corners(NodeId node) const;
   int corner_count(NodeId node) const;                    // 3 or 4
   void corners(NodeId node, std::vector<Vec3>& out) const;  // the same, into a reused buffer
+  // Vertex indices of the corners, in the same order (the first corner_count(node) are meaningful): corners
+  // of different nodes are the same point exactly when their indices are equal.
+  std::array<std::uint32_t, 4> corner_vertices(NodeId node) const;
   // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise.
   void leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const;
 

@@ -213,6 +213,42 @@ TEST(HemicubeGeometry, InverseDepthIsAffineInPixels) {
   }
 }
 
+TEST(HemicubeGeometry, SharedPointsGiveTheSameFormFactors) {
+  // A 6 x 6 grid of quads on a wall, added once with a point per corner and once keyed by grid vertex (so
+  // that a vertex is transformed once per shot, not once per quad): the view shares the points, and both
+  // hemicubes give bit-identical form factors either way.
+  ReceiverView plain, keyed;
+  const int n = 6;
+  const Plane wall{{0.0, 0.0, -1.0}, 2.0};  // z = 2, facing the shooter at the origin
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const auto at = [&](int a, int b) { return Vec3(-1.5 + 0.5 * a, -1.5 + 0.5 * b, 2.0); };
+      const Vec3 quad[4] = {at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j)};  // counter-clockwise seen from below
+      const auto key = [&](int a, int b) { return static_cast<std::uint32_t>(a * (n + 1) + b); };
+      const std::uint32_t keys[4] = {key(i, j), key(i, j + 1), key(i + 1, j + 1), key(i + 1, j)};
+      plain.add(quad, wall, 0, 0);
+      keyed.add(quad, keys, wall, 0, 0);
+    }
+  EXPECT_EQ(plain.points().size(), 4u * n * n);
+  EXPECT_EQ(keyed.points().size(), static_cast<std::size_t>((n + 1) * (n + 1)));
+  ASSERT_EQ(keyed.corner_points().size(), keyed.vertices().size());
+  for (std::size_t v = 0; v < keyed.vertices().size(); ++v)
+    EXPECT_EQ(keyed.points()[keyed.corner_points()[v]], keyed.vertices()[v]);
+  const Shooter shooter = Shooter::from_normal(Vec3(0.1, -0.2, 0.0), glm::normalize(Vec3(0.2, 0.1, 1.0)));
+  for (const char* name : {"aa-hemicube", "hemicube"}) {
+    auto backend = make_backend(name, {51});
+    std::vector<double> a(plain.size()), b(keyed.size());
+    backend->compute(shooter, plain, {}, a);
+    backend->compute(shooter, keyed, {}, b);
+    EXPECT_EQ(a, b) << name;
+    EXPECT_GT(a[14], 0.0) << name;
+  }
+  // A key may name only one point.
+  const Vec3 tri[3] = {{0, 0, 2}, {1, 0, 2}, {0, 1, 2}};
+  const std::uint32_t reused[3] = {0, 1, 2};
+  EXPECT_THROW(keyed.add(tri, reused, wall, 0, 0), Error);
+}
+
 TEST(HemicubeGeometry, ResolutionOutOfRangeIsRefused) {
   EXPECT_THROW(make_backend("aa-hemicube", {.resolution = 1}), Error);
   EXPECT_THROW(make_backend("hemicube", {.resolution = 8193}), Error);
