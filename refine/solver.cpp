@@ -17,7 +17,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <set>
 
 namespace aarad::refine {
 namespace {
@@ -228,20 +227,25 @@ bool Solver::shoot_once() {
   compute_form_factors(shooter, {});
 
   hierarchy_.unshot(shooter) = Rgb{};
-  incident_.assign(hierarchy_.node_count(), Rgb{});
+  // incident_ holds this shot's flux per node: clear what the previous shot wrote (not all nodes).
+  for (mesh::NodeId node : incident_written_) incident_[node] = Rgb{};
+  incident_written_.clear();
+  incident_.resize(hierarchy_.node_count(), Rgb{});
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
-  std::vector<mesh::NodeId> touched;
+  touched_.clear();
+  const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces
   for (std::size_t i = 0; i < cache_.size(); ++i) {
-    const mesh::NodeId leaf = cache_.leaf(i);
     // A planar surface sends nothing to itself (its own elements included).
-    if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[i] > 0.0)) continue;
+    if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
+    const mesh::NodeId leaf = cache_.leaf(i);
     incident_[leaf] = shot_flux * ff_[i];
+    incident_written_.push_back(leaf);
     receive(leaf, incident_[leaf], 1.0);
-    touched.push_back(leaf);
+    touched_.push_back(static_cast<std::uint32_t>(i));
   }
   ++shots_;
 
-  if (options_.adaptive) substructure(shooter, shot_flux, touched);
+  if (options_.adaptive) substructure(shooter, shot_flux);
   return true;
 }
 
@@ -253,50 +257,54 @@ double Solver::largest_reflected_luminance() const {
   return largest;
 }
 
-void Solver::update_adjacency() {
-  if (adjacency_revision_ == cache_.revision()) return;
+void Solver::update_receiver_tables() {
+  if (tables_revision_ == cache_.revision()) return;
   neighbour_offsets_.assign(1, 0);
   neighbours_.clear();
-  for (mesh::NodeId leaf : cache_.leaves()) {
-    for (mesh::NodeId neighbour : hierarchy_.edge_neighbours(leaf)) neighbours_.push_back(neighbour);
+  emission_.resize(cache_.size());
+  std::vector<mesh::NodeId> around;
+  for (std::size_t i = 0; i < cache_.size(); ++i) {
+    const mesh::NodeId leaf = cache_.leaf(i);
+    hierarchy_.edge_neighbours(leaf, around);
+    for (mesh::NodeId neighbour : around) neighbours_.push_back(cache_.receiver(neighbour));
     neighbour_offsets_.push_back(static_cast<std::uint32_t>(neighbours_.size()));
+    emission_[i] = material(leaf).emission;
   }
-  adjacency_revision_ = cache_.revision();
+  tables_revision_ = cache_.revision();
 }
 
-void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux, const std::vector<mesh::NodeId>& touched) {
+void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   auto start = Clock::now();
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
-  std::set<mesh::NodeId> candidates;
   // Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the
-  // threshold grows with the largest one.
-  const auto test_pair = [&](mesh::NodeId leaf, double own, mesh::NodeId neighbour, double threshold) {
-    if (std::abs(own - hierarchy_.radiosity(neighbour).luminance()) > threshold) {
-      candidates.insert(leaf);
-      candidates.insert(neighbour);
-    }
-  };
-  // Leaves of the current revision: through the cached adjacency; leaves made by splits: asked directly.
-  const auto test_gradients = [&](const std::vector<mesh::NodeId>& leaves, bool cached) {
-    const double threshold = options_.gradient * largest_reflected_luminance();
-    if (!(threshold > 0.0)) return;
-    for (mesh::NodeId leaf : leaves) {
-      const double own = hierarchy_.radiosity(leaf).luminance();
-      if (cached) {
-        const std::uint32_t r = cache_.receiver(leaf);
-        for (std::uint32_t k = neighbour_offsets_[r]; k < neighbour_offsets_[r + 1]; ++k) {
-          test_pair(leaf, own, neighbours_[k], threshold);
-        }
-      } else {
-        for (mesh::NodeId neighbour : hierarchy_.edge_neighbours(leaf)) test_pair(leaf, own, neighbour, threshold);
+  // threshold grows with the largest one. The leaves of the current revision are tested through flat tables
+  // by receiver (luminance, neighbours); leaves made by splits are asked of the hierarchy directly.
+  update_receiver_tables();
+  double largest = 0.0;
+  luminance_.resize(cache_.size());
+  for (std::size_t i = 0; i < cache_.size(); ++i) {
+    const Rgb& b = hierarchy_.radiosity(cache_.leaf(i));
+    luminance_[i] = b.luminance();
+    largest = std::max(largest, (b - emission_[i]).luminance());
+  }
+  std::vector<mesh::NodeId> candidates;
+  double threshold = options_.gradient * largest;
+  if (threshold > 0.0) {
+    candidate_flag_.assign(cache_.size(), 0);
+    for (std::uint32_t r : touched_) {
+      const double own = luminance_[r];
+      for (std::uint32_t k = neighbour_offsets_[r]; k < neighbour_offsets_[r + 1]; ++k) {
+        const std::uint32_t neighbour = neighbours_[k];
+        if (std::abs(own - luminance_[neighbour]) > threshold) candidate_flag_[r] = candidate_flag_[neighbour] = 1;
       }
     }
-  };
-  update_adjacency();
-  test_gradients(touched, true);
+    for (std::size_t r = 0; r < cache_.size(); ++r)
+      if (candidate_flag_[r] != 0) candidates.push_back(cache_.leaf(r));  // by node id, as leaves are
+  }
 
   std::vector<mesh::NodeId> split_nodes;
   std::vector<mesh::NodeId> new_leaves;
+  std::vector<mesh::NodeId> around;
   while (!candidates.empty()) {
     const mesh::NodeId first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
     split_nodes.clear();
@@ -346,9 +354,23 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux, const std:
       const std::uint32_t receiver = cache_.receiver(leaf);
       if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[receiver] > 0.0)) continue;
       incident_[leaf] = shot_flux * ff_[receiver];
+      incident_written_.push_back(leaf);
       receive(leaf, incident_[leaf], 1.0);
     }
-    test_gradients(new_leaves, false);
+    threshold = options_.gradient * largest_reflected_luminance();
+    if (!(threshold > 0.0)) continue;
+    for (mesh::NodeId leaf : new_leaves) {
+      const double own = hierarchy_.radiosity(leaf).luminance();
+      hierarchy_.edge_neighbours(leaf, around);
+      for (mesh::NodeId neighbour : around) {
+        if (std::abs(own - hierarchy_.radiosity(neighbour).luminance()) > threshold) {
+          candidates.push_back(leaf);
+          candidates.push_back(neighbour);
+        }
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
   }
   times_.subdivision += seconds_since(start);
 }

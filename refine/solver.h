@@ -114,9 +114,11 @@ class Solver {
   void compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset);
   const Material& material(mesh::NodeId node) const;
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
-  void substructure(mesh::NodeId shooter, const Rgb& shot_flux, const std::vector<mesh::NodeId>& touched);
+  // Splits where the shot made radiosity change fast, and re-shoots into the new leaves (see solver.cpp).
+  void substructure(mesh::NodeId shooter, const Rgb& shot_flux);
   double largest_reflected_luminance() const;
-  void update_adjacency();
+  // Rebuilds the per-receiver tables (adjacency, emission) when the receiver view changed.
+  void update_receiver_tables();
 
   const Scene& scene_;
   SolverOptions options_;
@@ -128,11 +130,18 @@ class Solver {
   std::vector<double> ff_;         // per receiver: form factor of the current shot
   std::vector<double> ff_sample_;  // per receiver: one sample point's factors
   std::vector<Rgb> incident_;      // per NodeId: flux the node received in the current shot (leaves)
+  std::vector<mesh::NodeId> incident_written_;  // the nodes whose incident_ the current shot set
+  std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
-  // Edge-neighbours of every leaf (by receiver index, CSR), valid for hierarchy revision adjacency_revision_.
+  // Per receiver, valid for hierarchy revision tables_revision_: edge-neighbours (receiver indices, CSR) and
+  // emission.
   std::vector<std::uint32_t> neighbour_offsets_;
-  std::vector<mesh::NodeId> neighbours_;
-  std::uint64_t adjacency_revision_ = ~std::uint64_t{0};
+  std::vector<std::uint32_t> neighbours_;
+  std::vector<Rgb> emission_;
+  std::uint64_t tables_revision_ = ~std::uint64_t{0};
+  // Per receiver, scratch of one substructuring step: radiosity luminance, and 1 when it is to be split.
+  std::vector<double> luminance_;
+  std::vector<std::uint8_t> candidate_flag_;
 
   Rgb emitted_flux_{};
   Rgb absorbed_flux_{};
