@@ -134,17 +134,6 @@ Vec3 to_local(const Shooter& shooter, const Vec3& p) {
   return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
 }
 
-Vec3 to_face(HemicubeFace face, const Vec3& q) {
-  switch (face) {
-    case HemicubeFace::kTop: return {q.z, q.x, q.y};
-    case HemicubeFace::kPosU: return {q.x, q.y, q.z};
-    case HemicubeFace::kNegU: return {-q.x, q.y, q.z};
-    case HemicubeFace::kPosV: return {q.y, q.x, q.z};
-    case HemicubeFace::kNegV: return {-q.y, q.x, q.z};
-  }
-  return q;
-}
-
 Plane plane_to_local(const Shooter& shooter, const Plane& plane) {
   const Vec3& n = plane.normal;
   return Plane{{glm::dot(n, shooter.tangent), glm::dot(n, shooter.bitangent), glm::dot(n, shooter.normal)},
@@ -240,18 +229,6 @@ std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face,
     current = 1 - current;
   }
   return count;
-}
-
-InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, double half_resolution) {
-  // Ray through face point (l1 / a, l2 / a) = (X, Y) meets n . q + d = 0 at a = -d / (n_a + n_1 X + n_2 Y),
-  // with X = x / h - 1 and Y = y / h - 1 (top) or y / h (side), h = half_resolution.
-  const Vec3 n = to_face(face, local_plane.normal);
-  const double k = -1.0 / local_plane.d;
-  InverseDepth r;
-  r.alpha = k * n.y / half_resolution;
-  r.beta = k * n.z / half_resolution;
-  r.gamma = k * (n.x - n.y - (face == HemicubeFace::kTop ? n.z : 0.0));
-  return r;
 }
 
 void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {

@@ -97,7 +97,16 @@ class HemicubeGeometry {
 // normal . (p - centre) (side_of_plane), and w is exactly 0 when p lies in the shooter's plane.
 Vec3 to_local(const Shooter& shooter, const Vec3& p);
 // Face coordinates (a, l1, l2) of a local point (see the table at the top of this file). Exact.
-Vec3 to_face(HemicubeFace face, const Vec3& local);
+inline Vec3 to_face(HemicubeFace face, const Vec3& q) {
+  switch (face) {
+    case HemicubeFace::kTop: return {q.z, q.x, q.y};
+    case HemicubeFace::kPosU: return {q.x, q.y, q.z};
+    case HemicubeFace::kNegU: return {-q.x, q.y, q.z};
+    case HemicubeFace::kPosV: return {q.y, q.x, q.z};
+    case HemicubeFace::kNegV: return {-q.y, q.x, q.z};
+  }
+  return q;
+}
 // A receiver plane in local coordinates: normal rotated into the frame, d = signed distance of the shooter's
 // centre (positive when the centre is on the front side).
 Plane plane_to_local(const Shooter& shooter, const Plane& plane);
@@ -142,7 +151,17 @@ struct InverseDepth {
   double alpha = 0.0, beta = 0.0, gamma = 0.0;
   double at(double x, double y) const { return alpha * x + beta * y + gamma; }
 };
-InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, double half_resolution);
+inline InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, double half_resolution) {
+  // Ray through face point (l1 / a, l2 / a) = (X, Y) meets n . q + d = 0 at a = -d / (n_a + n_1 X + n_2 Y),
+  // with X = x / h - 1 and Y = y / h - 1 (top) or y / h (side), h = half_resolution.
+  const Vec3 n = to_face(face, local_plane.normal);
+  const double k = -1.0 / local_plane.d;
+  InverseDepth r;
+  r.alpha = k * n.y / half_resolution;
+  r.beta = k * n.z / half_resolution;
+  r.gamma = k * (n.x - n.y - (face == HemicubeFace::kTop ? n.z : 0.0));
+  return r;
+}
 
 // Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
 // receiver may reach. Reused across shots without reallocating once warmed up.
