@@ -119,11 +119,11 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
   prepared_.prepare(shooter, receivers);
-  std::size_t max_vertices = 3;
-  for (std::size_t i = 0; i < receivers.size(); ++i) max_vertices = std::max(max_vertices, receivers.polygon(i).size());
-  for (auto& sums : task_sums_) sums.assign(receivers.size(), 0.0);
+  const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   tbb::parallel_for(0, kTasks, [&](int task) {
-    shoot_task(task, receivers, max_vertices, buffers_.local(), task_sums_[static_cast<std::size_t>(task)]);
+    std::vector<double>& sums = task_sums_[static_cast<std::size_t>(task)];
+    sums.assign(receivers.size(), 0.0);
+    shoot_task(task, receivers, max_vertices, buffers_.local(), sums);
   });
   combine_face_sums(task_sums_, subset, out);
 }

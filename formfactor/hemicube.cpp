@@ -78,13 +78,12 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
 void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                               std::span<const std::uint32_t> subset, std::span<double> out) {
   prepared_.prepare(shooter, receivers);
-  std::size_t max_vertices = 3;
-  for (std::size_t i = 0; i < receivers.size(); ++i) max_vertices = std::max(max_vertices, receivers.polygon(i).size());
-  for (auto& sums : task_sums_) sums.assign(receivers.size(), 0.0);
+  const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
   tbb::parallel_for(0, kFaceTasks, [&](int t) {
-    shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(),
-               task_sums_[static_cast<std::size_t>(t)]);
+    std::vector<double>& sums = task_sums_[static_cast<std::size_t>(t)];
+    sums.assign(receivers.size(), 0.0);
+    shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(), sums);
   });
   combine_face_sums(task_sums_, subset, out);
 }

@@ -104,8 +104,11 @@ void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span
     for (const std::vector<double>& face : face_sums) sum += face[i];
     out[i] = sum;
   };
-  if (subset.empty()) {
-    for (std::size_t i = 0; i < out.size(); ++i) combine(i);
+  if (subset.empty()) {  // every receiver: in parallel (each one's sum is the same whatever the thread count)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) combine(i);
+                      });
   } else {
     for (std::uint32_t i : subset) combine(i);
   }

@@ -16,6 +16,7 @@ void ReceiverView::clear() {
   points_.clear();
   corner_points_.clear();
   point_of_key_.clear();
+  max_polygon_size_ = 0;
 }
 
 void ReceiverView::reserve(std::size_t receivers, std::size_t vertices) {
@@ -60,6 +61,7 @@ std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const s
 std::uint32_t ReceiverView::append(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
                                    std::uint32_t patch) {
   vertices_.insert(vertices_.end(), polygon.begin(), polygon.end());
+  max_polygon_size_ = std::max(max_polygon_size_, polygon.size());
   offsets_.push_back(static_cast<std::uint32_t>(vertices_.size()));
   planes_.push_back(plane);
   surfaces_.push_back(surface);

@@ -33,6 +33,8 @@ class ReceiverView {
                     std::uint32_t surface, std::uint32_t patch);
 
   std::size_t size() const { return planes_.size(); }
+  // The most corners of any receiver (0 when empty).
+  std::size_t max_polygon_size() const { return max_polygon_size_; }
   std::span<const Vec3> polygon(std::size_t i) const {
     return {vertices_.data() + offsets_[i], vertices_.data() + offsets_[i + 1]};
   }
@@ -59,7 +61,8 @@ class ReceiverView {
   std::vector<std::uint32_t> patches_;
   std::vector<Vec3> points_;
   std::vector<std::uint32_t> corner_points_;  // per corner: index into points_
-  std::vector<std::uint32_t> point_of_key_;   // per caller key: index into points_, or kNoPoint
+  std::vector<std::uint32_t> point_of_key_;
+  std::size_t max_polygon_size_ = 0;   // per caller key: index into points_, or kNoPoint
   static constexpr std::uint32_t kNoPoint = 0xFFFFFFFFu;
 };
 
