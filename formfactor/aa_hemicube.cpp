@@ -120,7 +120,7 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
-  tbb::parallel_for(0, kTasks, [&](int task) {
+  run_face_tasks(tasks_, prepared_, [&](int task) {
     std::vector<double>& sums = task_sums_[static_cast<std::size_t>(task)];
     sums.assign(receivers.size(), 0.0);
     shoot_task(task, receivers, max_vertices, buffers_.local(), sums);

@@ -80,7 +80,7 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
-  tbb::parallel_for(0, kFaceTasks, [&](int t) {
+  run_face_tasks(tasks, prepared_, [&](int t) {
     std::vector<double>& sums = task_sums_[static_cast<std::size_t>(t)];
     sums.assign(receivers.size(), 0.0);
     shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(), sums);

@@ -8,7 +8,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -95,6 +98,26 @@ double HemicubeGeometry::total() const {
   double sum = 0.0;
   for (int f = 0; f < kHemicubeFaces; ++f) sum += face_total(static_cast<HemicubeFace>(f));
   return sum;
+}
+
+void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const PreparedReceivers& prepared,
+                    const std::function<void(int)>& run) {
+  std::array<double, kFaceTasks> load{};
+  std::array<int, kFaceTasks> order{};
+  for (int k = 0; k < kFaceTasks; ++k) {
+    const FaceTask& t = tasks[static_cast<std::size_t>(k)];
+    const double face_width = t.face == HemicubeFace::kTop ? 2.0 : 1.0;  // tasks per face
+    load[static_cast<std::size_t>(k)] = static_cast<double>(prepared.face_receivers(t.face)) / face_width;
+    order[static_cast<std::size_t>(k)] = k;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return load[static_cast<std::size_t>(a)] > load[static_cast<std::size_t>(b)];
+  });
+  std::atomic<int> next{0};
+  const int workers = std::min(kFaceTasks, tbb::this_task_arena::max_concurrency());
+  tbb::parallel_for(0, workers, [&](int) {
+    for (int k = next++; k < kFaceTasks; k = next++) run(order[static_cast<std::size_t>(k)]);
+  }, tbb::simple_partitioner());
 }
 
 void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span<const std::uint32_t> subset,
@@ -247,6 +270,7 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
   local_planes_.resize(count);
 
   cull_back_faces(shooter.centre, receivers, patch_state_, front_);
+  std::array<std::atomic<std::size_t>, kHemicubeFaces> face_receivers{};
 
   // Every point once (a vertex is a corner of up to four elements), then every receiver gathers its corners.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
@@ -258,6 +282,7 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
                       }
                     });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::array<std::size_t, kHemicubeFaces> faces{};
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       if (front_[i] == 0 || offsets_[i + 1] - offsets_[i] < 3) {
         face_mask_[i] = 0;  // culled: no face looks at its local coordinates
@@ -274,11 +299,17 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
       outside_[i] = any;
       local_planes_[i] = plane_to_local(shooter, receivers.plane(i));
       std::uint8_t mask = 0;
-      for (int f = 0; f < kHemicubeFaces; ++f)
-        if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
+      for (int f = 0; f < kHemicubeFaces; ++f) {
+        if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) {
+          mask |= static_cast<std::uint8_t>(1u << f);
+          ++faces[static_cast<std::size_t>(f)];
+        }
+      }
       face_mask_[i] = mask;
     }
+    for (int f = 0; f < kHemicubeFaces; ++f) face_receivers[static_cast<std::size_t>(f)] += faces[static_cast<std::size_t>(f)];
   });
+  for (int f = 0; f < kHemicubeFaces; ++f) face_receivers_[static_cast<std::size_t>(f)] = face_receivers[static_cast<std::size_t>(f)];
 }
 
 void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,

@@ -35,6 +35,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -179,6 +180,8 @@ class PreparedReceivers {
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   const Plane& local_plane(std::size_t i) const { return local_planes_[i]; }
   std::size_t size() const { return face_mask_.size(); }
+  // Number of receivers that may touch face f (a cheap estimate of the face's work).
+  std::size_t face_receivers(HemicubeFace face) const { return face_receivers_[static_cast<std::size_t>(face)]; }
 
  private:
   std::span<const std::uint32_t> offsets_;
@@ -190,6 +193,7 @@ class PreparedReceivers {
   std::vector<Plane> local_planes_;
   std::vector<std::uint8_t> patch_state_;
   std::vector<std::uint8_t> front_;
+  std::array<std::size_t, kHemicubeFaces> face_receivers_{};
 };
 
 // Columns [x0, x1) of one face: the unit of parallel work of both hemicubes. The top face has twice the pixels of
@@ -220,6 +224,13 @@ inline bool may_reach(const FaceTask& task, int resolution, std::span<const Vec3
   return false;
 }
 
+// Runs run(k) for k = 0 .. kFaceTasks - 1 on the threads of the current TBB arena, the tasks of most receivers
+// (prepared.face_receivers, a top-face half counted as half the top face) first: each thread takes the next
+// task when it is free, so the small ones fill in at the end (longest processing time first). Six uneven tasks
+// in index order left one thread waiting on the last big one. Each task's result depends only on the task, so
+// the order changes no number.
+void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const PreparedReceivers& prepared,
+                    const std::function<void(int)>& run);
 // out[i] = the partial sums of the faces (or of a back end's tasks) added in order (deterministic whatever the
 // thread count), for every i of `subset` (every receiver when it is empty).
 void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span<const std::uint32_t> subset,
