@@ -384,27 +384,16 @@ void Hierarchy::split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_
   }
 }
 
-SplitResult Hierarchy::split(NodeId node) {
-  SplitResult result;
+Hierarchy::Refusal Hierarchy::refusal(NodeId node, double& smallest) const {
   const Impl& m = *impl_;
-  if (node >= node_count()) {
-    result.reason = "node " + std::to_string(node) + " does not exist (" + std::to_string(node_count()) + " nodes)";
-    return result;
-  }
-  if (!is_leaf(node)) {
-    result.reason = "node " + std::to_string(node) + " is not a leaf";
-    return result;
-  }
-  if (m.level[node] >= m.options.max_level) {
-    result.reason = "node " + std::to_string(node) + " is at the maximum level " + std::to_string(m.options.max_level);
-    return result;
-  }
+  if (node >= node_count()) return Refusal::kMissing;
+  if (!is_leaf(node)) return Refusal::kInner;
+  if (m.level[node] >= m.options.max_level) return Refusal::kMaxLevel;
   // Children's areas from the corner positions the split will create (the same expressions).
   const int n = m.corner_count(node);
   std::array<Vec3, 4> c, mid;
   for (int k = 0; k < n; ++k) c[static_cast<std::size_t>(k)] = m.point(m.corners[node][static_cast<std::size_t>(k)]);
   for (int k = 0; k < n; ++k) mid[static_cast<std::size_t>(k)] = 0.5 * (c[static_cast<std::size_t>(k)] + c[static_cast<std::size_t>((k + 1) % n)]);
-  double smallest = 0.0;
   if (n == 4) {
     const Vec3 centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
     smallest = std::numeric_limits<double>::infinity();
@@ -415,10 +404,33 @@ SplitResult Hierarchy::split(NodeId node) {
   } else {
     smallest = m.area[node] / 4.0;  // the four children of a triangle are congruent up to rounding
   }
-  if (smallest < m.options.min_area) {
-    result.reason = "node " + std::to_string(node) + ": a child would have area " + std::to_string(smallest) +
-                    ", below min_area " + std::to_string(m.options.min_area);
-    return result;
+  return smallest < m.options.min_area ? Refusal::kMinArea : Refusal::kNone;
+}
+
+bool Hierarchy::can_split(NodeId node) const {
+  double smallest = 0.0;
+  return refusal(node, smallest) == Refusal::kNone;
+}
+
+SplitResult Hierarchy::split(NodeId node) {
+  SplitResult result;
+  const Impl& m = *impl_;
+  double smallest = 0.0;
+  switch (refusal(node, smallest)) {
+    case Refusal::kNone: break;
+    case Refusal::kMissing:
+      result.reason = "node " + std::to_string(node) + " does not exist (" + std::to_string(node_count()) + " nodes)";
+      return result;
+    case Refusal::kInner:
+      result.reason = "node " + std::to_string(node) + " is not a leaf";
+      return result;
+    case Refusal::kMaxLevel:
+      result.reason = "node " + std::to_string(node) + " is at the maximum level " + std::to_string(m.options.max_level);
+      return result;
+    case Refusal::kMinArea:
+      result.reason = "node " + std::to_string(node) + ": a child would have area " + std::to_string(smallest) +
+                      ", below min_area " + std::to_string(m.options.min_area);
+      return result;
   }
   if (m.options.balance) split_coarser_neighbours(node, result.also_split);
   const std::array<NodeId, 4> ids = split_leaf(node);

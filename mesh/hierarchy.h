@@ -100,6 +100,8 @@ class Hierarchy {
   // its level is max_level, or when a child would be smaller than min_area. With balance on, neighbours
   // are split first so edge-neighbours differ by at most one level.
   SplitResult split(NodeId node);
+  // Whether split(node) would be accepted (the same tests, without composing a reason).
+  bool can_split(NodeId node) const;
 
   // Leaves of the same surface that share a piece of an edge with leaf `node` (across hanging vertices too),
   // in the order of the leaf's face loop. O(number of vertices on the leaf's loop).
@@ -112,6 +114,10 @@ class Hierarchy {
   Impl& impl() { return *impl_; }
 
  private:
+  enum class Refusal { kNone, kMissing, kInner, kMaxLevel, kMinArea };
+  // Why split(node) would be refused (kNone: it would not); `smallest` gets the smallest child's area when the
+  // area was tested.
+  Refusal refusal(NodeId node, double& smallest) const;
   std::array<NodeId, 4> split_leaf(NodeId node);  // the split itself, no checks
   void split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_split);
 

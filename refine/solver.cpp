@@ -309,7 +309,9 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     const mesh::NodeId first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
     split_nodes.clear();
     for (mesh::NodeId candidate : candidates) {
-      if (!hierarchy_.is_leaf(candidate)) continue;  // already split by balancing
+      // Already split by balancing, or at the deepest level or smallest area (asked first: a refused split
+      // composes its reason, and such leaves come back as candidates shot after shot).
+      if (!hierarchy_.can_split(candidate)) continue;
       const mesh::SplitResult result = hierarchy_.split(candidate);
       if (!result.ok) continue;
       split_nodes.push_back(candidate);
