@@ -205,8 +205,13 @@ TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
   o.max_level = 2;
   Hierarchy h(test::square_scene(), o);
   const NodeId e = h.leaves()[0];
+  EXPECT_TRUE(h.can_split(e));
   const SplitResult first = h.split(e);
   ASSERT_TRUE(first.ok);
+  // can_split answers as split does, for every refusal.
+  EXPECT_FALSE(h.can_split(first.children[0]));
+  EXPECT_FALSE(h.can_split(e));
+  EXPECT_FALSE(h.can_split(static_cast<NodeId>(h.node_count())));
   const SplitResult deep = h.split(first.children[0]);
   EXPECT_FALSE(deep.ok);
   EXPECT_NE(deep.reason.find("maximum level 2"), std::string::npos) << deep.reason;
@@ -219,6 +224,7 @@ TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
   small.min_area = 0.3;  // children would have 0.25
   Hierarchy g(test::square_scene(), small);
   const std::uint64_t revision = g.revision();
+  EXPECT_FALSE(g.can_split(g.leaves()[0]));
   const SplitResult refused = g.split(g.leaves()[0]);
   EXPECT_FALSE(refused.ok);
   EXPECT_NE(refused.reason.find("below min_area"), std::string::npos) << refused.reason;
