@@ -17,8 +17,8 @@
 //
 // Parallel over six tasks: the top face cut into its left and right column halves, and the four side faces, so
 // that every task has as many pixels as a side face and two threads share the work evenly (one arena per
-// thread, one rasterizer per task and thread). The per-task partial sums are added in task order, so the numbers
-// do not depend on the number of threads.
+// thread, one rasterizer per task and thread), started largest first (run_face_tasks). The per-task partial sums
+// are added in task order, so the numbers do not depend on the number of threads.
 #pragma once
 
 #include "core/area_rasterizer.h"

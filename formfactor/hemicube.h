@@ -27,11 +27,10 @@ struct ScanCrossing {
 
 // Point-sampling scan conversion with a consistent fill rule. Calls visit(x, y) for every pixel of columns
 // [column_begin, column_end) and rows [0, height) whose sample point (x + 1/2, sample_y(y)) lies inside `polygon`
-// (either winding; the
-// non-zero winding rule). A sample point on an edge belongs to the polygon on the edge's right in x, or above
-// it for a horizontal edge (half-open spans [x_left, x_right) and edges [y_low, y_high)): of two polygons
-// sharing an edge exactly one takes it. Crossings are computed from each edge's endpoints in canonical order,
-// so both polygons compute the same x. `crossings` needs room for polygon.size() entries.
+// (either winding; the non-zero winding rule). A sample point on an edge belongs to the polygon on the edge's
+// right in x, or above it for a horizontal edge (half-open spans [x_left, x_right) and edges [y_low, y_high)): of
+// two polygons sharing an edge exactly one takes it. Crossings are computed from each edge's endpoints in
+// canonical order, so both polygons compute the same x. `crossings` needs room for polygon.size() entries.
 template <class SampleY, class Visit>
 void sample_polygon(std::span<const Vec2> polygon, int column_begin, int column_end, int height, SampleY&& sample_y,
                     std::span<ScanCrossing> crossings, Visit&& visit) {
