@@ -73,6 +73,7 @@ nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violati
         {"max_shots", options.max_shots},
         {"adaptive", options.adaptive},
         {"gradient", options.gradient},
+        {"relaxation", options.relaxation},
         {"shooter_samples", options.shooter_samples},
         {"patch_size", meshing.patch_size},
         {"element_size", meshing.element_size},

@@ -4,7 +4,8 @@
 // One shot: the patch s with the largest unshot flux dB_s A_s (summed over the three channels) shoots from its
 // centroid; every leaf element e on patch j not in s's plane receives the incident flux dB_s F(s->e) A_s per
 // channel, of which rho_j reflects: B_e += rho_j dB_s F A_s / A_e and dB_j += rho_j dB_s F A_s / A_j; the rest
-// is absorbed. Then dB_s = 0.
+// is absorbed. Then dB_s = 0, or with overrelaxation w (Gortler, Cohen and Slusallek, "Radiosity and relaxation
+// methods", IEEE CG&A 1994) s shoots w dB_s and keeps (1 - w) dB_s.
 // Substructuring after the shot: a leaf whose radiosity luminance differs from an edge-neighbour's by more than
 // `gradient` times the largest reflected luminance (B - E) is split; its new leaves drop the parent's share of
 // this shot (they inherited the parent's B), get their own share from the back end (subset = new leaves, all
@@ -122,6 +123,7 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
   if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
   if (options_.max_shots < 0) throw Error("solver: --max-shots must be >= 0");
   if (!(options_.gradient > 0.0)) throw Error("solver: --gradient must be > 0");
+  if (!(options_.relaxation >= 1.0 && options_.relaxation < 2.0)) throw Error("solver: --relaxation must be in [1, 2)");
   if (options_.shooter_samples < 1 || options_.shooter_samples > 64) {
     throw Error("solver: shooter samples must be in [1, 64]");
   }
@@ -157,16 +159,27 @@ Rgb Solver::unshot_flux() const {
   return total;
 }
 
+double Solver::unshot_magnitude(mesh::NodeId patch) const {
+  const Rgb& unshot = hierarchy_.unshot(patch);
+  return (std::abs(unshot.r) + std::abs(unshot.g) + std::abs(unshot.b)) * hierarchy_.area(patch);
+}
+
 double Solver::unshot_fraction() const {
   const double emitted = emitted_flux_.sum();
-  return emitted > 0.0 ? unshot_flux().sum() / emitted : 0.0;
+  if (!(emitted > 0.0)) return 0.0;
+  Rgb unshot{};  // summed per channel, then over channels, as unshot_flux().sum()
+  for (mesh::NodeId patch : hierarchy_.patches()) {
+    const Rgb& u = hierarchy_.unshot(patch);
+    unshot += Rgb(std::abs(u.r), std::abs(u.g), std::abs(u.b)) * hierarchy_.area(patch);
+  }
+  return unshot.sum() / emitted;
 }
 
 mesh::NodeId Solver::pick_shooter() const {
   mesh::NodeId best = mesh::kNoNode;
   double best_flux = 0.0;
   for (mesh::NodeId patch : hierarchy_.patches()) {
-    const double flux = hierarchy_.unshot(patch).sum() * hierarchy_.area(patch);
+    const double flux = unshot_magnitude(patch);
     if (flux > best_flux) {  // strict: ties go to the lowest id, deterministically
       best_flux = flux;
       best = patch;
@@ -221,12 +234,13 @@ bool Solver::shoot_once() {
 
   const mesh::NodeId shooter = pick_shooter();
   if (shooter == mesh::kNoNode) return false;
-  const Rgb shot_flux = hierarchy_.unshot(shooter) * hierarchy_.area(shooter);
+  const double relaxation = options_.relaxation;
+  const Rgb shot_flux = hierarchy_.unshot(shooter) * (relaxation * hierarchy_.area(shooter));
 
   ff_.assign(cache_.size(), 0.0);
   compute_form_factors(shooter, {});
 
-  hierarchy_.unshot(shooter) = Rgb{};
+  hierarchy_.unshot(shooter) = relaxation == 1.0 ? Rgb{} : hierarchy_.unshot(shooter) * (1.0 - relaxation);
   // incident_ holds this shot's flux per node: clear what the previous shot wrote (not all nodes).
   for (mesh::NodeId node : incident_written_) incident_[node] = Rgb{};
   incident_written_.clear();

@@ -30,6 +30,10 @@ struct SolverOptions {
   // Split a leaf when the luminance of its radiosity differs from an edge-neighbour's by more than
   // gradient times the largest reflected radiosity luminance (B - E) of any leaf.
   double gradient = 0.1;
+  // Overrelaxation factor w of the shooting step: the shooter sends w dB_s and keeps (1 - w) dB_s (Gortler,
+  // Cohen and Slusallek 1994; progressive refinement is Southwell iteration). 1 is the paper's plain
+  // progressive refinement; values in (1, 2) overshoot, which converges in fewer shots (docs/solver.md).
+  double relaxation = 1.0;
   // Gauss-Legendre points per direction on the shooting patch: 1 shoots from the centroid (the paper's
   // method); n > 1 averages the back end's point factors over n x n points, approximating the
   // patch-to-element form factor (used to check the loop against closed-form patch-to-patch values).
@@ -83,7 +87,9 @@ class Solver {
   Rgb emitted_flux() const { return emitted_flux_; }
   Rgb absorbed_flux() const { return absorbed_flux_; }
   Rgb unshot_flux() const;
-  // Unshot flux over emitted flux, both summed over channels (0 when nothing emits).
+  // Unshot flux over emitted flux, both summed over channels (0 when nothing emits). The unshot flux is taken
+  // as sum |dB| A over patches and channels: with overrelaxation dB can be negative, and an overshoot is
+  // flux still to be taken back. Without it every dB >= 0 and this is unshot_flux().sum() / emitted.
   double unshot_fraction() const;
 
   // The display-only ambient term of Cohen et al. 1988 (references.md) and each leaf's displayed radiosity
@@ -117,6 +123,8 @@ class Solver {
   // Splits where the shot made radiosity change fast, and re-shoots into the new leaves (see solver.cpp).
   void substructure(mesh::NodeId shooter, const Rgb& shot_flux);
   double largest_reflected_luminance() const;
+  // The patch's unshot flux by which shooters are chosen: sum over channels of |dB| A.
+  double unshot_magnitude(mesh::NodeId patch) const;
   // Rebuilds the per-receiver tables (adjacency, emission) when the receiver view changed.
   void update_receiver_tables();
 

@@ -111,6 +111,11 @@ TEST(Cli, UnknownOptionAndBadResolutionExitTwo) {
     EXPECT_EQ(r.code, 2) << command;
     EXPECT_NE(r.err.find("--resolution"), std::string::npos) << command << ": " << r.err;
   }
+  for (const char* command : {"solve --relaxation 2", "solve --relaxation 0.5", "solve --relaxation fast"}) {
+    const ProgramRun r = aarad(command);
+    EXPECT_EQ(r.code, 2) << command;
+    EXPECT_NE(r.err.find("--relaxation"), std::string::npos) << command << ": " << r.err;
+  }
 }
 
 TEST(Cli, FormfactorsFromTheLightAsJson) {

@@ -2,6 +2,7 @@
 // analytic back end and one patch per face; energy balance in a closed scene; the furnace (B = 2 everywhere)
 // with the AA hemicube, and the classical hemicube's figures for comparison.
 #include "core/builtin_scenes.h"
+#include "core/error.h"
 #include "refine/solver.h"
 #include "tests/solver_test_scenes.h"
 
@@ -117,11 +118,12 @@ struct FurnaceFigures {
   double seconds = 0.0;
 };
 
-FurnaceFigures solve_furnace(const std::string& backend, int resolution) {
+FurnaceFigures solve_furnace(const std::string& backend, int resolution, double relaxation = 1.0) {
   const Scene scene = make_furnace();
   SolverOptions options;
   options.backend = backend;
   options.resolution = resolution;
+  options.relaxation = relaxation;
   options.converge = 1e-4;
   options.adaptive = false;  // the exact answer is flat; the figures measure form-factor error alone
   // From the centroid alone, the point-to-area approximation of a patch's factors (the same for every back
@@ -145,9 +147,11 @@ FurnaceFigures solve_furnace(const std::string& backend, int resolution) {
   figures.rms = std::sqrt(sum_squares / (3.0 * static_cast<double>(figures.elements)));
   figures.shots = solver.shots();
   figures.seconds = solver.times().total;
-  std::printf("furnace %-12s N=%-5d elements %zu shots %lld: RMS deviation from B = 2 %.4f %%, worst %.4f %%\n",
-              backend.c_str(), resolution, figures.elements, static_cast<long long>(figures.shots),
-              100.0 * figures.rms, 100.0 * figures.worst);
+  std::printf(
+      "furnace %-12s N=%-5d relaxation %.2f elements %zu shots %lld: RMS deviation from B = 2 %.4f %%, worst %.4f "
+      "%%\n",
+      backend.c_str(), resolution, relaxation, figures.elements, static_cast<long long>(figures.shots),
+      100.0 * figures.rms, 100.0 * figures.worst);
   return figures;
 }
 
@@ -159,6 +163,82 @@ TEST(SolverFurnace, AaHemicubeAtResolution100IsWithinOnePercent) {
   const FurnaceFigures classical = solve_furnace("hemicube", 100);
   RecordProperty("aa_rms", std::to_string(aa.rms));
   RecordProperty("classical_rms", std::to_string(classical.rms));
+}
+
+// Overrelaxation (Gortler, Cohen and Slusallek 1994): shooting w dB_s and keeping (1 - w) dB_s changes the
+// path, not the fixed point, so the closed forms and the furnace hold as without it, in fewer shots.
+TEST(SolverRelaxation, ClosedUnitCubeReachesTheReferenceRadiositiesInFewerShots) {
+  const Scene scene = test::unit_cube();
+  Solver plain(scene, one_patch_per_face(16));
+  plain.run();
+  SolverOptions options = one_patch_per_face(16);
+  options.relaxation = 1.3;
+  Solver overrelaxed(scene, options);
+  overrelaxed.run();
+  ASSERT_TRUE(overrelaxed.converged());
+  EXPECT_NEAR(leaf_radiosity_of_group(overrelaxed, "floor").r, 1.09090910, 2e-6);
+  EXPECT_NEAR(leaf_radiosity_of_group(overrelaxed, "ceiling").r, 0.18174583, 2e-6);
+  for (const char* wall : {"wall_x0", "wall_x1", "wall_z0", "wall_z1"}) {
+    EXPECT_NEAR(leaf_radiosity_of_group(overrelaxed, wall).r, 0.18183627, 2e-6) << wall;
+  }
+  std::printf("closed cube to 1e-12: %lld shots plain, %lld with relaxation 1.3\n",
+              static_cast<long long>(plain.shots()), static_cast<long long>(overrelaxed.shots()));
+  EXPECT_LT(overrelaxed.shots(), plain.shots());
+}
+
+TEST(SolverRelaxation, OvershootKeepsTheEnergyBalance) {
+  // As SolverEnergy above, overrelaxed: patches' dB go negative (an overshoot still to be taken back), and the
+  // signed unshot flux keeps absorbed + unshot = emitted; the stopping test counts |dB|.
+  Scene scene = test::unit_cube(1.0, 0.5, 1.0);
+  scene.materials[0].emission = Rgb(1.0, 0.6, 0.2);
+  SolverOptions options;
+  options.backend = "analytic";
+  options.converge = 1e-4;
+  options.relaxation = 1.4;
+  options.meshing.patch_size = 0.5;
+  options.meshing.element_size = 0.25;
+  options.meshing.min_area = 1e-3;
+  Solver solver(scene, options);
+  bool went_negative = false;
+  solver.run([&](const Progress&) {
+    for (mesh::NodeId patch : solver.hierarchy().patches()) {
+      const Rgb& u = solver.hierarchy().unshot(patch);
+      went_negative = went_negative || u.r < 0.0 || u.g < 0.0 || u.b < 0.0;
+    }
+    return true;
+  });
+  ASSERT_TRUE(solver.converged());
+  EXPECT_TRUE(went_negative) << "with w = 1.4 a shooter keeps -0.4 dB";
+  EXPECT_LT(solver.unshot_fraction(), 1e-4);
+  const Rgb emitted = solver.emitted_flux();
+  const Rgb unshot = solver.unshot_flux();
+  const Rgb absorbed = solver.absorbed_flux();
+  Rgb balance{};
+  for (mesh::NodeId leaf : solver.hierarchy().leaves()) {
+    const Rgb rho = scene.material_of_surface(solver.hierarchy().surface(leaf)).reflectance;
+    balance += (Rgb(1.0) - rho) * solver.hierarchy().radiosity(leaf) * solver.hierarchy().area(leaf);
+  }
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(absorbed[c] + unshot[c], emitted[c], 1e-9 * emitted[c]) << "channel " << c;
+    EXPECT_NEAR(balance[c] + unshot[c], emitted[c], 1e-3 * emitted[c]) << "channel " << c;
+  }
+}
+
+TEST(SolverRelaxation, FurnaceStaysWithinOnePercentInFewerShots) {
+  const FurnaceFigures plain = solve_furnace("aa-hemicube", 100);
+  const FurnaceFigures overrelaxed = solve_furnace("aa-hemicube", 100, 1.2);
+  EXPECT_LT(overrelaxed.rms, 0.01);
+  EXPECT_LT(overrelaxed.worst, 0.05);
+  EXPECT_LT(overrelaxed.shots, plain.shots);
+}
+
+TEST(SolverRelaxation, OutsideOneToTwoIsRefused) {
+  const Scene scene = test::unit_cube();
+  for (double relaxation : {0.9, 2.0, -1.0, std::nan("")}) {
+    SolverOptions options = one_patch_per_face(1);
+    options.relaxation = relaxation;
+    EXPECT_THROW(Solver(scene, options), Error) << relaxation;
+  }
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -211,6 +212,15 @@ void add_solve_command(CLI::App& app) {
   cmd->add_option("--gradient", options->solver.gradient,
                   "Split when neighbours' luminance differs by more than this x the largest reflected radiosity")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--relaxation", options->solver.relaxation,
+                  "Overrelaxation of the shooting step in [1, 2): shoot W x unshot (1: plain progressive refinement)")
+      ->check([](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0';
+        return number && value >= 1.0 && value < 2.0 ? std::string{} : "Value " + text + " not in range [1, 2)";
+      })
       ->capture_default_str();
   cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
       ->check(CLI::Range(0, 30));
