@@ -248,13 +248,19 @@ bool Solver::shoot_once() {
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   touched_.clear();
   const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces
+  update_deposits();
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     // A planar surface sends nothing to itself (its own elements included).
     if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
-    const mesh::NodeId leaf = cache_.leaf(i);
-    incident_[leaf] = shot_flux * ff_[i];
-    incident_written_.push_back(leaf);
-    receive(leaf, incident_[leaf], 1.0);
+    // receive(leaf, incident, 1) through the receiver's table entry: the same arithmetic.
+    const Deposit& d = deposits_[i];
+    const Rgb incident = shot_flux * ff_[i];
+    incident_[d.leaf] = incident;
+    incident_written_.push_back(d.leaf);
+    const Rgb reflected = d.reflectance * incident;
+    hierarchy_.radiosity(d.leaf) += reflected * d.inverse_area;
+    hierarchy_.unshot(d.patch) += reflected * d.inverse_patch_area;
+    absorbed_flux_ += (Rgb(1.0) - d.reflectance) * incident;
     touched_.push_back(static_cast<std::uint32_t>(i));
   }
   ++shots_;
@@ -285,6 +291,17 @@ void Solver::update_receiver_tables() {
     emission_[i] = material(leaf).emission;
   }
   tables_revision_ = cache_.revision();
+}
+
+void Solver::update_deposits() {
+  if (deposits_revision_ == cache_.revision()) return;
+  deposits_.resize(cache_.size());
+  for (std::size_t i = 0; i < cache_.size(); ++i) {
+    const mesh::NodeId leaf = cache_.leaf(i);
+    const mesh::NodeId patch = hierarchy_.patch(leaf);
+    deposits_[i] = {material(leaf).reflectance, 1.0 / hierarchy_.area(leaf), 1.0 / hierarchy_.area(patch), leaf, patch};
+  }
+  deposits_revision_ = cache_.revision();
 }
 
 void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {

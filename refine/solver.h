@@ -127,6 +127,8 @@ class Solver {
   double unshot_magnitude(mesh::NodeId patch) const;
   // Rebuilds the per-receiver tables (adjacency, emission) when the receiver view changed.
   void update_receiver_tables();
+  // Rebuilds deposits_ when the receiver view changed.
+  void update_deposits();
 
   const Scene& scene_;
   SolverOptions options_;
@@ -147,6 +149,17 @@ class Solver {
   std::vector<std::uint32_t> neighbours_;
   std::vector<Rgb> emission_;
   std::uint64_t tables_revision_ = ~std::uint64_t{0};
+  // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it (receive()
+  // without the lookups through the hierarchy and the scene).
+  struct Deposit {
+    Rgb reflectance;
+    double inverse_area = 0.0;        // 1 / A_e
+    double inverse_patch_area = 0.0;  // 1 / A_j of its patch
+    mesh::NodeId leaf = 0;
+    mesh::NodeId patch = 0;
+  };
+  std::vector<Deposit> deposits_;
+  std::uint64_t deposits_revision_ = ~std::uint64_t{0};
   // Per receiver, scratch of one substructuring step: radiosity luminance, and 1 when it is to be split.
   std::vector<double> luminance_;
   std::vector<std::uint8_t> candidate_flag_;
