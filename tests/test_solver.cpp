@@ -65,14 +65,9 @@ TEST(SolverAnalytic, TwoUnitSquaresFromTheCentroidUseThePointFactor) {
   EXPECT_NEAR(leaf_radiosity_of_group(solver, "receiver").r, 0.5 * f * b1, 1e-6);
 }
 
-TEST(SolverAnalytic, ClosedUnitCubeMatchesReferenceRadiosities) {
-  const Scene scene = test::unit_cube();
-  Solver solver(scene, one_patch_per_face(16));
-  ASSERT_EQ(solver.hierarchy().patches().size(), 6u);
-  solver.run();
-  EXPECT_TRUE(solver.converged());
-  // references.md: B_floor = 1.09090910, B_ceiling = 0.18174583, B_wall = 0.18183627. Walls meet the floor at
-  // an edge, where the point factor has a log-type kink, so Gauss quadrature converges more slowly there.
+// references.md: B_floor = 1.09090910, B_ceiling = 0.18174583, B_wall = 0.18183627. Walls meet the floor at an
+// edge, where the point factor has a log-type kink, so Gauss quadrature converges more slowly there.
+void expect_unit_cube_references(const Solver& solver) {
   EXPECT_NEAR(leaf_radiosity_of_group(solver, "floor").r, 1.09090910, 2e-6);
   EXPECT_NEAR(leaf_radiosity_of_group(solver, "ceiling").r, 0.18174583, 2e-6);
   for (const char* wall : {"wall_x0", "wall_x1", "wall_z0", "wall_z1"}) {
@@ -80,34 +75,58 @@ TEST(SolverAnalytic, ClosedUnitCubeMatchesReferenceRadiosities) {
   }
 }
 
-TEST(SolverEnergy, ClosedCubeBalancesAtConvergence) {
-  // Subdivided, adaptive, coloured: every shot's factors sum to 1 in a closed convex room with the analytic
-  // back end, so absorbed + unshot = emitted holds to rounding, and at convergence (references.md)
-  // sum (1 - rho) B A + unshot = emitted to 1e-3 (uniform rho).
+TEST(SolverAnalytic, ClosedUnitCubeMatchesReferenceRadiosities) {
+  const Scene scene = test::unit_cube();
+  Solver solver(scene, one_patch_per_face(16));
+  ASSERT_EQ(solver.hierarchy().patches().size(), 6u);
+  solver.run();
+  EXPECT_TRUE(solver.converged());
+  expect_unit_cube_references(solver);
+}
+
+// The closed cube of the energy tests: subdivided, adaptive, coloured emission, analytic form factors.
+Scene coloured_cube() {
   Scene scene = test::unit_cube(1.0, 0.5, 1.0);
   scene.materials[0].emission = Rgb(1.0, 0.6, 0.2);
+  return scene;
+}
+
+SolverOptions energy_options(double relaxation) {
   SolverOptions options;
   options.backend = "analytic";
   options.converge = 1e-4;
+  options.relaxation = relaxation;
   options.meshing.patch_size = 0.5;
   options.meshing.element_size = 0.25;
   options.meshing.min_area = 1e-3;
-  Solver solver(scene, options);
-  solver.run();
-  ASSERT_TRUE(solver.converged());
-  EXPECT_GT(solver.splits(), 0) << "the corners of a lit cube have gradients to refine";
+  return options;
+}
+
+// Every shot's factors sum to 1 in a closed convex room with the analytic back end, so absorbed + unshot =
+// emitted holds to rounding, and at convergence (references.md) sum (1 - rho) B A + unshot = emitted to 1e-3
+// (uniform rho).
+void expect_energy_balance(const Solver& solver) {
   const Rgb emitted = solver.emitted_flux();
   const Rgb unshot = solver.unshot_flux();
   const Rgb absorbed = solver.absorbed_flux();
   Rgb balance{};
   for (mesh::NodeId leaf : solver.hierarchy().leaves()) {
-    const Rgb rho = scene.material_of_surface(solver.hierarchy().surface(leaf)).reflectance;
+    const Rgb rho = solver.scene().material_of_surface(solver.hierarchy().surface(leaf)).reflectance;
     balance += (Rgb(1.0) - rho) * solver.hierarchy().radiosity(leaf) * solver.hierarchy().area(leaf);
   }
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(absorbed[c] + unshot[c], emitted[c], 1e-9 * emitted[c]) << "channel " << c;
     EXPECT_NEAR(balance[c] + unshot[c], emitted[c], 1e-3 * emitted[c]) << "channel " << c;
   }
+}
+
+TEST(SolverEnergy, ClosedCubeBalancesAtConvergence) {
+  const Scene scene = coloured_cube();
+  Solver solver(scene, energy_options(1.0));
+  solver.run();
+  ASSERT_TRUE(solver.converged());
+  EXPECT_GT(solver.splits(), 0) << "the corners of a lit cube have gradients to refine";
+  expect_energy_balance(solver);
 }
 
 struct FurnaceFigures {
@@ -176,11 +195,7 @@ TEST(SolverRelaxation, ClosedUnitCubeReachesTheReferenceRadiositiesInFewerShots)
   Solver overrelaxed(scene, options);
   overrelaxed.run();
   ASSERT_TRUE(overrelaxed.converged());
-  EXPECT_NEAR(leaf_radiosity_of_group(overrelaxed, "floor").r, 1.09090910, 2e-6);
-  EXPECT_NEAR(leaf_radiosity_of_group(overrelaxed, "ceiling").r, 0.18174583, 2e-6);
-  for (const char* wall : {"wall_x0", "wall_x1", "wall_z0", "wall_z1"}) {
-    EXPECT_NEAR(leaf_radiosity_of_group(overrelaxed, wall).r, 0.18183627, 2e-6) << wall;
-  }
+  expect_unit_cube_references(overrelaxed);
   std::printf("closed cube to 1e-12: %lld shots plain, %lld with relaxation 1.3\n",
               static_cast<long long>(plain.shots()), static_cast<long long>(overrelaxed.shots()));
   EXPECT_LT(overrelaxed.shots(), plain.shots());
@@ -189,16 +204,8 @@ TEST(SolverRelaxation, ClosedUnitCubeReachesTheReferenceRadiositiesInFewerShots)
 TEST(SolverRelaxation, OvershootKeepsTheEnergyBalance) {
   // As SolverEnergy above, overrelaxed: patches' dB go negative (an overshoot still to be taken back), and the
   // signed unshot flux keeps absorbed + unshot = emitted; the stopping test counts |dB|.
-  Scene scene = test::unit_cube(1.0, 0.5, 1.0);
-  scene.materials[0].emission = Rgb(1.0, 0.6, 0.2);
-  SolverOptions options;
-  options.backend = "analytic";
-  options.converge = 1e-4;
-  options.relaxation = 1.4;
-  options.meshing.patch_size = 0.5;
-  options.meshing.element_size = 0.25;
-  options.meshing.min_area = 1e-3;
-  Solver solver(scene, options);
+  const Scene scene = coloured_cube();
+  Solver solver(scene, energy_options(1.4));
   bool went_negative = false;
   solver.run([&](const Progress&) {
     for (mesh::NodeId patch : solver.hierarchy().patches()) {
@@ -210,18 +217,7 @@ TEST(SolverRelaxation, OvershootKeepsTheEnergyBalance) {
   ASSERT_TRUE(solver.converged());
   EXPECT_TRUE(went_negative) << "with w = 1.4 a shooter keeps -0.4 dB";
   EXPECT_LT(solver.unshot_fraction(), 1e-4);
-  const Rgb emitted = solver.emitted_flux();
-  const Rgb unshot = solver.unshot_flux();
-  const Rgb absorbed = solver.absorbed_flux();
-  Rgb balance{};
-  for (mesh::NodeId leaf : solver.hierarchy().leaves()) {
-    const Rgb rho = scene.material_of_surface(solver.hierarchy().surface(leaf)).reflectance;
-    balance += (Rgb(1.0) - rho) * solver.hierarchy().radiosity(leaf) * solver.hierarchy().area(leaf);
-  }
-  for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(absorbed[c] + unshot[c], emitted[c], 1e-9 * emitted[c]) << "channel " << c;
-    EXPECT_NEAR(balance[c] + unshot[c], emitted[c], 1e-3 * emitted[c]) << "channel " << c;
-  }
+  expect_energy_balance(solver);
 }
 
 TEST(SolverRelaxation, FurnaceStaysWithinOnePercentInFewerShots) {
