@@ -158,13 +158,14 @@ class PartialLists {
   std::span<const CoverageEntry> reached(std::size_t pixel, double full_depth) const {
     const Cell* cells = &pool_[head_[pixel]];
     const std::uint32_t count = cells[0].header.count;
+    static_assert(sizeof(Cell) == sizeof(CoverageEntry));
+    if (full_depth == kFar) return {&cells[1].entry, count};  // no full entry: every depth is in front of it
     std::uint32_t prev_surface = kNoSurface, k = 1;
     for (; k <= count; ++k) {
       const CoverageEntry& e = cells[k].entry;
       if (e.surface != prev_surface && !(e.depth < full_depth)) break;  // a group behind the full entry
       prev_surface = e.surface;
     }
-    static_assert(sizeof(Cell) == sizeof(CoverageEntry));
     return {&cells[1].entry, k - 1};
   }
   void clear(std::size_t pixel) { head_[pixel] = kNil; }
