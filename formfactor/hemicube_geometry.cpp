@@ -209,15 +209,20 @@ inline Vec3 crossing(bool top, int k, const Vec3& p, double vp, const Vec3& q, d
 
 std::uint32_t frustum_outcode(const Vec3& local) {
   // face_outcode of every face, written out on (u, v, w): the same differences as through to_face, so the same
-  // exact signs, without the per-face shuffle (this runs for every vertex of every receiver in every shot).
+  // exact signs, without the per-face shuffle (this runs for every mesh vertex in every shot). The twenty
+  // differences are six and their negatives: y - x is exactly -(x - y) and x + y is y + x in the rounding to
+  // nearest the program runs in (-frounding-math keeps the compiler from assuming so), so "-(x) < 0" is "x > 0".
   const double u = local.x, v = local.y, w = local.z;
-  const auto bit = [](double x, int k) { return static_cast<std::uint32_t>(x < 0.0) << k; };
-  const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0);
-  return bit(w - u, 0) | bit(w + u, 1) | bit(w - v, 2) | bit(w + v, 3) |        // top: a = w, l1 = u, l2 = v
-         bit(u - v, 4) | bit(u + v, 5) | bit(u - w, 6) | below << 7 |            // +u: a = u, l1 = v, l2 = w
-         bit(-u - v, 8) | bit(-u + v, 9) | bit(-u - w, 10) | below << 11 |       // -u: a = -u, l1 = v, l2 = w
-         bit(v - u, 12) | bit(v + u, 13) | bit(v - w, 14) | below << 15 |        // +v: a = v, l1 = u, l2 = w
-         bit(-v - u, 16) | bit(-v + u, 17) | bit(-v - w, 18) | below << 19;      // -v: a = -v, l1 = u, l2 = w
+  const double a = w - u, b = w + u, c = w - v, d = w + v, e = u - v, f = u + v;
+  const auto neg = [](double x, int k) { return static_cast<std::uint32_t>(x < 0.0) << k; };
+  const auto pos = [](double x, int k) { return static_cast<std::uint32_t>(x > 0.0) << k; };
+  const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0) * 0x88880u;  // bit 3 of every side face
+  return below |
+         neg(a, 0) | neg(b, 1) | neg(c, 2) | neg(d, 3) |      // top: w - u, w + u, w - v, w + v
+         neg(e, 4) | neg(f, 5) | pos(a, 6) |                  // +u: u - v, u + v, u - w
+         pos(f, 8) | pos(e, 9) | pos(b, 10) |                 // -u: -u - v, -u + v, -u - w
+         pos(e, 12) | neg(f, 13) | pos(c, 14) |               // +v: v - u, v + u, v - w
+         pos(f, 16) | neg(e, 17) | pos(d, 18);                // -v: -v - u, -v + u, -v - w
 }
 
 std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face, std::uint32_t outside_mask,
