@@ -27,25 +27,25 @@ std::uint32_t PartialLists::allocate(std::uint32_t capacity) {
 bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) {
   Cell* cells = &pool_[list];
   const std::uint32_t count = cells[0].header.count;
-  // Find the group of the entry's surface, else the depth position (decided at group heads only, so groups
-  // stay contiguous).
-  std::uint32_t position = count + 1, group_end = 0;
-  std::uint32_t prev_surface = kNoSurface;
-  double group_sum = entry.coverage;
-  for (std::uint32_t k = 1; k <= count; ++k) {
+  const std::uint32_t surface = entry.surface;
+  // The group of the entry's surface, if the list has one; meanwhile the depth position (the first group head
+  // behind the entry: positions are decided at group heads only, so groups stay contiguous).
+  std::uint32_t position = count + 1, prev_surface = kNoSurface, k = 1;
+  for (; k <= count; ++k) {
     const CoverageEntry& e = cells[k].entry;
-    if (e.surface == entry.surface) {
-      group_end = k;
-      group_sum += e.coverage;
-    } else if (group_end != 0) {
-      break;  // past the group
-    } else if (position > count && e.surface != prev_surface && e.depth > entry.depth) {
-      position = k;
-    }
+    if (e.surface == surface) break;
+    if (position > count && e.surface != prev_surface && e.depth > entry.depth) position = k;
     prev_surface = e.surface;
   }
-  if (group_end != 0) {
-    position = group_end + 1;  // join the group, after its last piece
+  const bool joins = k <= count;
+  double group_sum = entry.coverage;
+  if (joins) {
+    // Join the group, after its last piece.
+    do {
+      group_sum += cells[k].entry.coverage;
+      ++k;
+    } while (k <= count && cells[k].entry.surface == surface);
+    position = k;
   } else if (position > count && cells[0].header.full != 0) {
     return false;  // behind the covering group
   }
@@ -60,10 +60,10 @@ bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) 
     cells = &pool_[moved];
   }
   // Insertion sort: shift the entries behind one place back.
-  for (std::uint32_t k = count; k >= position; --k) cells[k + 1] = cells[k];
+  for (std::uint32_t i = count; i >= position; --i) cells[i + 1] = cells[i];
   cells[position].entry = entry;
   std::uint32_t new_count = count + 1;
-  if (group_end != 0 && group_sum >= kFullCoverage) {
+  if (joins && group_sum >= kFullCoverage) {
     new_count = position;  // everything behind a covering group is hidden
     cells[0].header.full = 1;
   }
