@@ -136,7 +136,8 @@ int main(int argc, char** argv) {
   if (threads > 0) control.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   const auto wants = [&](const char* name) { return scenes.find(name) != std::string::npos; };
 
-  std::printf("| method | resolution | relaxation | Cornell box (to 1 %%) | office (to 1 %%) | furnace RMS / worst (to 1e-4) |\n");
+  std::printf("| method | resolution | relaxation | Cornell box (to 1 %%) | office (to 1 %%) "
+              "| furnace RMS / worst (to 1e-4) |\n");
   std::printf("|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   const Scene cornell = make_cornell_box();

@@ -311,9 +311,9 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
       }
       face_mask_[i] = mask;
     }
-    for (int f = 0; f < kHemicubeFaces; ++f) face_receivers[static_cast<std::size_t>(f)] += faces[static_cast<std::size_t>(f)];
+    for (std::size_t f = 0; f < faces.size(); ++f) face_receivers[f] += faces[f];
   });
-  for (int f = 0; f < kHemicubeFaces; ++f) face_receivers_[static_cast<std::size_t>(f)] = face_receivers[static_cast<std::size_t>(f)];
+  for (std::size_t f = 0; f < face_receivers.size(); ++f) face_receivers_[f] = face_receivers[f];
 }
 
 void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,

@@ -308,8 +308,9 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   auto start = Clock::now();
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   // Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the
-  // threshold grows with the largest one (with overrelaxation a shot can be negative; then this is a heuristic). The leaves of the current revision are tested through flat tables
-  // by receiver (luminance, neighbours); leaves made by splits are asked of the hierarchy directly.
+  // threshold grows with the largest one (with overrelaxation a shot can be negative, and this is a heuristic).
+  // The leaves of the current revision are tested through flat tables by receiver (luminance, neighbours);
+  // leaves made by splits are asked of the hierarchy directly.
   update_receiver_tables();
   double largest = 0.0;
   luminance_.resize(cache_.size());
