@@ -74,6 +74,7 @@ nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violati
         {"adaptive", options.adaptive},
         {"gradient", options.gradient},
         {"relaxation", options.relaxation},
+        {"overshoot", options.overshoot},
         {"shooter_samples", options.shooter_samples},
         {"patch_size", meshing.patch_size},
         {"element_size", meshing.element_size},

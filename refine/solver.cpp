@@ -5,7 +5,9 @@
 // centroid; every leaf element e on patch j not in s's plane receives the incident flux dB_s F(s->e) A_s per
 // channel, of which rho_j reflects: B_e += rho_j dB_s F A_s / A_e and dB_j += rho_j dB_s F A_s / A_j; the rest
 // is absorbed. Then dB_s = 0, or with overrelaxation w (Gortler, Cohen and Slusallek, "Radiosity and relaxation
-// methods", IEEE CG&A 1994) s shoots w dB_s and keeps (1 - w) dB_s.
+// methods", IEEE CG&A 1994) s shoots w dB_s and keeps (1 - w) dB_s; with ambient overshooting (Feda and
+// Purgathofer, "Accelerating radiosity by overshooting", Eurographics Workshop on Rendering 1992) s also shoots
+// rho_s x ambient and keeps minus that.
 // Substructuring after the shot: a leaf whose radiosity luminance differs from an edge-neighbour's by more than
 // `gradient` times the largest reflected luminance (B - E) is split; its new leaves drop the parent's share of
 // this shot (they inherited the parent's B), get their own share from the back end (subset = new leaves, all
@@ -235,12 +237,17 @@ bool Solver::shoot_once() {
   const mesh::NodeId shooter = pick_shooter();
   if (shooter == mesh::kNoNode) return false;
   const double relaxation = options_.relaxation;
-  const Rgb shot_flux = hierarchy_.unshot(shooter) * (relaxation * hierarchy_.area(shooter));
+  // With overshooting, also what the shooter is expected to receive later: its reflectance times the ambient
+  // term of the unshot flux.
+  const Rgb overshoot = options_.overshoot ? material(shooter).reflectance * ambient() : Rgb{};
+  const double area = hierarchy_.area(shooter);
+  const Rgb shot_flux = hierarchy_.unshot(shooter) * (relaxation * area) + overshoot * area;
 
   ff_.assign(cache_.size(), 0.0);
   compute_form_factors(shooter, {});
 
-  hierarchy_.unshot(shooter) = relaxation == 1.0 ? Rgb{} : hierarchy_.unshot(shooter) * (1.0 - relaxation);
+  hierarchy_.unshot(shooter) =
+      (relaxation == 1.0 ? Rgb{} : hierarchy_.unshot(shooter) * (1.0 - relaxation)) - overshoot;
   // incident_ holds this shot's flux per node: clear what the previous shot wrote (not all nodes).
   for (mesh::NodeId node : incident_written_) incident_[node] = Rgb{};
   incident_written_.clear();

@@ -34,6 +34,10 @@ struct SolverOptions {
   // Cohen and Slusallek 1994; progressive refinement is Southwell iteration). 1 is the paper's plain
   // progressive refinement; values in (1, 2) overshoot, which converges in fewer shots (docs/solver.md).
   double relaxation = 1.0;
+  // Ambient overshooting (Feda and Purgathofer 1992): the shooter also sends rho_s times the ambient term of
+  // the unshot radiosity (references.md), an estimate of what it will receive later, and keeps its negative.
+  // Off by default (the paper's method); on, the office converges in a third of the shots (docs/solver.md).
+  bool overshoot = false;
   // Gauss-Legendre points per direction on the shooting patch: 1 shoots from the centroid (the paper's
   // method); n > 1 averages the back end's point factors over n x n points, approximating the
   // patch-to-element form factor (used to check the loop against closed-form patch-to-patch values).

@@ -222,6 +222,8 @@ void add_solve_command(CLI::App& app) {
         return number && value >= 1.0 && value < 2.0 ? std::string{} : "Value " + text + " not in range [1, 2)";
       })
       ->capture_default_str();
+  cmd->add_flag("--overshoot", options->solver.overshoot,
+                "Ambient overshooting: also shoot rho x the ambient unshot radiosity (fewer shots; default off)");
   cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
       ->check(CLI::Range(0, 30));
   cmd->add_option("--min-area", options->min_area, "Smallest element a split may create, scene units^2")
@@ -239,7 +241,9 @@ void add_solve_command(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--out", options->out, "Output directory (default out/<scene name>)");
-  cmd->add_option("--width", options->width, "Image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
+  cmd->add_option("--width", options->width, "Image width in pixels")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
   cmd->add_option("--height", options->height, "Image height in pixels")
       ->check(CLI::Range(1, 16384))
       ->capture_default_str();
