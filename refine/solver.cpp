@@ -125,7 +125,9 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
   if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
   if (options_.max_shots < 0) throw Error("solver: --max-shots must be >= 0");
   if (!(options_.gradient > 0.0)) throw Error("solver: --gradient must be > 0");
-  if (!(options_.relaxation >= 1.0 && options_.relaxation < 2.0)) throw Error("solver: --relaxation must be in [1, 2)");
+  if (!(options_.relaxation >= 1.0 && options_.relaxation < 2.0)) {
+    throw Error("solver: --relaxation must be in [1, 2)");
+  }
   if (options_.shooter_samples < 1 || options_.shooter_samples > 64) {
     throw Error("solver: shooter samples must be in [1, 64]");
   }
@@ -161,19 +163,16 @@ Rgb Solver::unshot_flux() const {
   return total;
 }
 
-double Solver::unshot_magnitude(mesh::NodeId patch) const {
-  const Rgb& unshot = hierarchy_.unshot(patch);
-  return (std::abs(unshot.r) + std::abs(unshot.g) + std::abs(unshot.b)) * hierarchy_.area(patch);
+Rgb Solver::unshot_magnitude(mesh::NodeId patch) const {
+  const Rgb& u = hierarchy_.unshot(patch);
+  return Rgb(std::abs(u.r), std::abs(u.g), std::abs(u.b));
 }
 
 double Solver::unshot_fraction() const {
   const double emitted = emitted_flux_.sum();
   if (!(emitted > 0.0)) return 0.0;
   Rgb unshot{};  // summed per channel, then over channels, as unshot_flux().sum()
-  for (mesh::NodeId patch : hierarchy_.patches()) {
-    const Rgb& u = hierarchy_.unshot(patch);
-    unshot += Rgb(std::abs(u.r), std::abs(u.g), std::abs(u.b)) * hierarchy_.area(patch);
-  }
+  for (mesh::NodeId patch : hierarchy_.patches()) unshot += unshot_magnitude(patch) * hierarchy_.area(patch);
   return unshot.sum() / emitted;
 }
 
@@ -181,7 +180,7 @@ mesh::NodeId Solver::pick_shooter() const {
   mesh::NodeId best = mesh::kNoNode;
   double best_flux = 0.0;
   for (mesh::NodeId patch : hierarchy_.patches()) {
-    const double flux = unshot_magnitude(patch);
+    const double flux = unshot_magnitude(patch).sum() * hierarchy_.area(patch);
     if (flux > best_flux) {  // strict: ties go to the lowest id, deterministically
       best_flux = flux;
       best = patch;
@@ -220,13 +219,17 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   times_.form_factors += seconds_since(start);
 }
 
+void Solver::deposit(const Deposit& d, const Rgb& incident, double sign) {
+  const Rgb reflected = d.reflectance * incident;  // flux
+  hierarchy_.radiosity(d.leaf) += reflected * d.inverse_area;
+  hierarchy_.unshot(d.patch) += reflected * d.inverse_patch_area;
+  absorbed_flux_ += (Rgb(1.0) - d.reflectance) * incident * sign;
+}
+
 void Solver::receive(mesh::NodeId leaf, const Rgb& incident, double sign) {
-  const Rgb& rho = material(leaf).reflectance;
-  const Rgb reflected = rho * incident;  // flux
-  hierarchy_.radiosity(leaf) += reflected * (sign / hierarchy_.area(leaf));
   const mesh::NodeId patch = hierarchy_.patch(leaf);
-  hierarchy_.unshot(patch) += reflected * (sign / hierarchy_.area(patch));
-  absorbed_flux_ += (Rgb(1.0) - rho) * incident * sign;
+  deposit({material(leaf).reflectance, sign / hierarchy_.area(leaf), sign / hierarchy_.area(patch), leaf, patch},
+          incident, sign);
 }
 
 bool Solver::shoot_once() {
@@ -246,8 +249,7 @@ bool Solver::shoot_once() {
   ff_.assign(cache_.size(), 0.0);
   compute_form_factors(shooter, {});
 
-  hierarchy_.unshot(shooter) =
-      (relaxation == 1.0 ? Rgb{} : hierarchy_.unshot(shooter) * (1.0 - relaxation)) - overshoot;
+  hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
   // incident_ holds this shot's flux per node: clear what the previous shot wrote (not all nodes).
   for (mesh::NodeId node : incident_written_) incident_[node] = Rgb{};
   incident_written_.clear();
@@ -259,15 +261,11 @@ bool Solver::shoot_once() {
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     // A planar surface sends nothing to itself (its own elements included).
     if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
-    // receive(leaf, incident, 1) through the receiver's table entry: the same arithmetic.
-    const Deposit& d = deposits_[i];
+    const Deposit& d = deposits_[i];  // receive(leaf, incident, 1) without the lookups
     const Rgb incident = shot_flux * ff_[i];
     incident_[d.leaf] = incident;
     incident_written_.push_back(d.leaf);
-    const Rgb reflected = d.reflectance * incident;
-    hierarchy_.radiosity(d.leaf) += reflected * d.inverse_area;
-    hierarchy_.unshot(d.patch) += reflected * d.inverse_patch_area;
-    absorbed_flux_ += (Rgb(1.0) - d.reflectance) * incident;
+    deposit(d, incident, 1.0);
     touched_.push_back(static_cast<std::uint32_t>(i));
   }
   ++shots_;
@@ -315,9 +313,9 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   auto start = Clock::now();
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   // Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the
-  // threshold grows with the largest one (with overrelaxation a shot can be negative, and this is a heuristic).
-  // The leaves of the current revision are tested through flat tables by receiver (luminance, neighbours);
-  // leaves made by splits are asked of the hierarchy directly.
+  // threshold grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this
+  // is a heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
+  // neighbours); leaves made by splits are asked of the hierarchy directly.
   update_receiver_tables();
   double largest = 0.0;
   luminance_.resize(cache_.size());

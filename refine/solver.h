@@ -92,7 +92,7 @@ class Solver {
   Rgb absorbed_flux() const { return absorbed_flux_; }
   Rgb unshot_flux() const;
   // Unshot flux over emitted flux, both summed over channels (0 when nothing emits). The unshot flux is taken
-  // as sum |dB| A over patches and channels: with overrelaxation dB can be negative, and an overshoot is
+  // as sum |dB| A over patches and channels: with overrelaxation or overshooting dB can be negative, and that is
   // flux still to be taken back. Without it every dB >= 0 and this is unshot_flux().sum() / emitted.
   double unshot_fraction() const;
 
@@ -124,11 +124,15 @@ class Solver {
   void compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset);
   const Material& material(mesh::NodeId node) const;
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
+  struct Deposit;
+  // Adds rho x incident to the leaf's B and its patch's dB (scaled by the inverse areas of d) and
+  // sign x (1 - rho) x incident to the absorbed flux.
+  void deposit(const Deposit& d, const Rgb& incident, double sign);
   // Splits where the shot made radiosity change fast, and re-shoots into the new leaves (see solver.cpp).
   void substructure(mesh::NodeId shooter, const Rgb& shot_flux);
   double largest_reflected_luminance() const;
-  // The patch's unshot flux by which shooters are chosen: sum over channels of |dB| A.
-  double unshot_magnitude(mesh::NodeId patch) const;
+  // |dB| per channel: with the patch's area, what chooses the shooter and what the unshot fraction sums.
+  Rgb unshot_magnitude(mesh::NodeId patch) const;
   // Rebuilds the per-receiver tables (adjacency, emission) when the receiver view changed.
   void update_receiver_tables();
   // Rebuilds deposits_ when the receiver view changed.
@@ -153,8 +157,8 @@ class Solver {
   std::vector<std::uint32_t> neighbours_;
   std::vector<Rgb> emission_;
   std::uint64_t tables_revision_ = ~std::uint64_t{0};
-  // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it (receive()
-  // without the lookups through the hierarchy and the scene).
+  // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it, with the
+  // areas' inverses (times the sign of the deposit when receive() builds one).
   struct Deposit {
     Rgb reflectance;
     double inverse_area = 0.0;        // 1 / A_e
