@@ -105,10 +105,37 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
   stride_ = row_top - row_begin_ + 1;
 
   const double winding_sign = orientation > 0 ? 1.0 : -1.0;
+  if (column_end_ - column_begin_ == 1 && min_x >= 0.0 && max_x <= width_ && min_y >= 0.0 &&
+      max_y < row_begin_ + 1.0) {
+    single_ = true;
+    single_coverage_ = single_pixel_area(polygon, winding_sign);
+    return result;
+  }
   for (std::size_t i = 0; i < n; ++i) add_edge(polygon[i], polygon[i + 1 == n ? 0 : i + 1], winding_sign);
   return result;
 }
 
+// A polygon inside one pixel, strictly below its top line and inside the viewport. The general traversal would
+// put every edge piece into this one cell: for an edge running from a to b (a.x < b.x) it adds
+// sign (b.x - a.x) ((a.y - row) + (b.y - row)) / 2 to A and nothing but zero-width pieces elsewhere, and the
+// carry phase reports A + 0. This is that sum, term for term and in the same order, so the coverage is the
+// same bit for bit as the traversal's (an edge along the viewport's bottom, which the traversal only marks,
+// has (a.y - row) + (b.y - row) = 0 here).
+double AreaRasterizer::single_pixel_area(std::span<const Vec2> polygon, double winding_sign) const {
+  const double row = row_begin_;
+  const std::size_t n = polygon.size();
+  double area = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 p = polygon[i], q = polygon[i + 1 == n ? 0 : i + 1];
+    if (p.x == q.x) continue;  // vertical: adds nothing
+    const bool forward = p.x < q.x;
+    const Vec2 a = forward ? p : q, b = forward ? q : p;
+    const double sign = forward ? -winding_sign : winding_sign;
+    const double d0 = sign * (b.x - a.x);
+    area += 0.5 * d0 * ((a.y - row) + (b.y - row));
+  }
+  return area;
+}
 // Columns [x0, x1) of an edge part below the viewport: it adds nothing, but the pixels above it down to
 // row 0 may be covered by the carry of the edges above, so those columns are scanned down to row 0.
 void AreaRasterizer::mark_bottom(double x0, double x1) {

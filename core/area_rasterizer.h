@@ -83,9 +83,11 @@ class AreaRasterizer {
     int to_bottom = 0;              // 1 when an edge part below the viewport crosses the column
   };
 
-  // Phase 1 (edge traversal): fills cells_ and columns_ over [column_begin_, column_end_). Returns the
-  // winding; nothing is touched for a degenerate polygon.
+  // Phase 1 (edge traversal): fills cells_ and columns_ over [column_begin_, column_end_), or, for a polygon
+  // inside one pixel, sets single_ and single_coverage_ instead. Returns the winding; nothing is touched for a
+  // degenerate polygon.
   RasterResult traverse_edges(std::span<const Vec2> polygon);
+  double single_pixel_area(std::span<const Vec2> polygon, double winding_sign) const;
   void add_edge(Vec2 p, Vec2 q, double sign);
   void add_clipped_piece(double x0, double y0, double x1, double y1, double slope, double inverse_slope,
                          double sign);
@@ -102,6 +104,9 @@ class AreaRasterizer {
   // piece of edge lying on the line y = height_ leaves its carry there). Cell k of a box column is row
   // row_begin_ + k.
   int column_begin_ = 0, column_end_ = 0, row_begin_ = 0, stride_ = 1;
+  // A polygon inside the single pixel (column_begin_, row_begin_): its coverage, computed without the cells.
+  bool single_ = false;
+  double single_coverage_ = 0.0;
   std::vector<Cell> cells_;      // column-major over the box, all zero between calls
   std::vector<Column> columns_;  // per box column, all Column{} between calls
 };
@@ -114,6 +119,13 @@ class AreaRasterizer {
 template <class Visit>
 RasterResult AreaRasterizer::rasterize(std::span<const Vec2> polygon, Visit&& visit) {
   const RasterResult result = traverse_edges(polygon);
+  if (single_) {  // inside one pixel: its coverage is all there is
+    single_ = false;
+    const double coverage = single_coverage_;
+    if (coverage > kCoverageFloor) visit(column_begin_, row_begin_, coverage < 1.0 ? coverage : 1.0);
+    column_begin_ = column_end_ = 0;
+    return result;
+  }
   const int top = height_;  // the row above the viewport
   Cell* cells = column(column_begin_) - row_begin_;  // indexed by the row
   for (int x = column_begin_; x < column_end_; ++x, cells += stride_) {
