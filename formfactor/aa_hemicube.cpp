@@ -53,26 +53,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       continue;
     const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
     if (m == 0) continue;
-    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
-    double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
-    bool degenerate = false;
-    for (std::size_t k = 0; k < m; ++k) {
-      const Vec3& f = b.clipped[k];
-      if (!(f.x > 0.0)) {
-        degenerate = true;
-        break;
-      }
-      Vec2 p = project_to_pixels(face, f, half);
-      p.x -= shift;
-      b.projected[k] = p;
-      x0 = std::min(x0, p.x);
-      x1 = std::max(x1, p.x);
-      y0 = std::min(y0, p.y);
-      y1 = std::max(y1, p.y);
-      lo = std::min(lo, 1.0 / f.x);
-      hi = std::max(hi, 1.0 / f.x);
-    }
-    if (degenerate || !(x1 > 0.0 && x0 < width)) continue;  // nothing in this task's columns
+    ProjectedBox box;
+    if (!project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, shift, b.projected, box) ||
+        !(box.x_max > 0.0 && box.x_min < width))
+      continue;  // degenerate, or nothing in this task's columns
     InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const auto receiver = static_cast<std::uint32_t>(i);
@@ -87,10 +71,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that
       // the walk's fractions refer to the area receivers can cover there.
       if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
-      const double px = std::clamp(x + 0.5, x0, x1), py = std::clamp(y + 0.5, y0, y1);
+      const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
       double z = depth.at(px, py);
-      if (!(z >= lo)) z = lo;
-      if (z > hi) z = hi;
+      if (!(z >= box.lo)) z = box.lo;
+      if (z > box.hi) z = box.hi;
       // Key -1/depth orders like the depth without a division.
       ++offered;
       arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface, spread});

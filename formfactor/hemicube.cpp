@@ -34,31 +34,19 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
       continue;
     const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
     if (m == 0) continue;
-    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
-    double x_min = lo, x_max = -lo;
-    bool degenerate = false;
-    for (std::size_t k = 0; k < m; ++k) {
-      const Vec3& f = b.clipped[k];
-      if (!(f.x > 0.0)) {
-        degenerate = true;
-        break;
-      }
-      b.projected[k] = project_to_pixels(face, f, half);
-      x_min = std::min(x_min, b.projected[k].x);
-      x_max = std::max(x_max, b.projected[k].x);
-      lo = std::min(lo, 1.0 / f.x);
-      hi = std::max(hi, 1.0 / f.x);
-    }
+    ProjectedBox box;
     // No sample x + 1/2 of the task's columns in [x_min, x_max): nothing to do here.
-    if (degenerate || x_max <= task.x0 + 0.5 || x_min > task.x1 - 0.5) continue;
+    if (!project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, 0.0, b.projected, box) ||
+        box.x_max <= task.x0 + 0.5 || box.x_min > task.x1 - 0.5)
+      continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const auto item = static_cast<std::uint32_t>(i);
     sample_polygon(std::span<const Vec2>(b.projected.data(), m), task.x0, task.x1, height, sample_y, b.crossings,
                    [&](int x, int y) {
                      // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
                      double z = depth.at(x + 0.5, sample_y(y));
-                     if (!(z >= lo)) z = lo;
-                     if (z > hi) z = hi;
+                     if (!(z >= box.lo)) z = box.lo;
+                     if (z > box.hi) z = box.hi;
                      const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
                      if (z > b.inverse_depth[p]) {
                        b.inverse_depth[p] = z;

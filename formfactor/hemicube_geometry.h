@@ -33,9 +33,11 @@
 #include "formfactor/backend.h"
 #include "formfactor/receiver_view.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -143,6 +145,36 @@ inline Vec2 project_to_pixels(HemicubeFace face, const Vec3& f, double half_reso
   const double x = (f.y / f.x + 1.0) * half_resolution;
   const double y = face == HemicubeFace::kTop ? (f.z / f.x + 1.0) * half_resolution : (f.z / f.x) * half_resolution;
   return {x, y};
+}
+
+// A clipped polygon projected onto a face: its bounding box in pixels and the range of 1 / depth over its vertices.
+struct ProjectedBox {
+  double x_min, x_max, y_min, y_max;
+  double lo, hi;  // smallest and largest 1 / depth (1 / a) of the vertices
+};
+
+// Projects the clipped polygon `clipped` (face coordinates) into `out`, moved left by `shift` pixels, and
+// fills `box`. Returns false, leaving `box` undefined, when a vertex is not strictly in front of the shooter
+// (a polygon squeezed onto the shooter's plane by the clipping: it covers no solid angle).
+inline bool project_clipped(HemicubeFace face, std::span<const Vec3> clipped, double half_resolution, double shift,
+                            std::span<Vec2> out, ProjectedBox& box) {
+  box = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+         std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+         std::numeric_limits<double>::infinity(), 0.0};
+  for (std::size_t k = 0; k < clipped.size(); ++k) {
+    const Vec3& f = clipped[k];
+    if (!(f.x > 0.0)) return false;
+    Vec2 p = project_to_pixels(face, f, half_resolution);
+    p.x -= shift;
+    out[k] = p;
+    box.x_min = std::min(box.x_min, p.x);
+    box.x_max = std::max(box.x_max, p.x);
+    box.y_min = std::min(box.y_min, p.y);
+    box.y_max = std::max(box.y_max, p.y);
+    box.lo = std::min(box.lo, 1.0 / f.x);
+    box.hi = std::max(box.hi, 1.0 / f.x);
+  }
+  return true;
 }
 
 // 1 / depth of a receiver plane along the rays of a face, as an affine function of pixel coordinates:
