@@ -15,10 +15,6 @@ Sign to_sign(CGAL::Sign s) { return static_cast<Sign>(static_cast<int>(s)); }
 Kernel::Point_2 point(const Vec2& v) { return {v.x, v.y}; }
 Kernel::Point_3 point(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-// Below this sum of |terms| a double evaluation may have underflowed (subnormal products carry an absolute
-// error of up to 2^-1075 each, which no relative bound covers), so the exact path decides. Above it those
-// absolute errors are far below 8 eps times the magnitude.
-constexpr double kFilterFloor = 1e-280;
 
 // Sign of a . s + d with a floating-point filter: the error bound of the double evaluation follows
 // Shewchuk's style estimate; when the result is inside it, fall back to exact rationals.
@@ -27,9 +23,9 @@ Sign exact_linear_sign(const Vec3& a, double d, const Vec3& s) {
   const double value = t0 + t1 + t2 + d;
   const double magnitude = std::abs(t0) + std::abs(t1) + std::abs(t2) + std::abs(d);
   // The relative bound fails where products underflow (their error is absolute, up to half the smallest
-  // subnormal each): below kFilterFloor the filter decides nothing.
+  // subnormal each): below kPredicateFilterFloor the filter decides nothing.
   const double bound = 8.0 * std::numeric_limits<double>::epsilon() * magnitude;
-  if (magnitude >= kFilterFloor) {
+  if (magnitude >= kPredicateFilterFloor) {
     if (value > bound) return Sign::kPositive;
     if (value < -bound) return Sign::kNegative;
   }
@@ -53,14 +49,9 @@ Sign orientation(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
 
 Sign side_of_plane(const Vec3& origin, const Vec3& n, const Vec3& s) {
   // n . (s - origin) = n . s - n . origin; evaluate with exact arithmetic on the inputs as given.
-  const double t0 = n.x * (s.x - origin.x), t1 = n.y * (s.y - origin.y), t2 = n.z * (s.z - origin.z);
-  const double value = t0 + t1 + t2;
-  const double magnitude = std::abs(t0) + std::abs(t1) + std::abs(t2);
-  const double bound = 8.0 * std::numeric_limits<double>::epsilon() * magnitude;
-  if (magnitude >= kFilterFloor) {  // see exact_linear_sign
-    if (value > bound) return Sign::kPositive;
-    if (value < -bound) return Sign::kNegative;
-  }
+  bool certain = false;
+  const double value = side_of_plane_value(origin, n, s, certain);
+  if (certain) return value > 0.0 ? Sign::kPositive : Sign::kNegative;
   using Q = CGAL::Exact_rational;
   const Q exact = Q(n.x) * (Q(s.x) - Q(origin.x)) + Q(n.y) * (Q(s.y) - Q(origin.y)) + Q(n.z) * (Q(s.z) - Q(origin.z));
   return to_sign(CGAL::sign(exact));

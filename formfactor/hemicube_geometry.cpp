@@ -146,8 +146,10 @@ void check_resolution(int resolution) {
 
 Vec3 to_local(const Shooter& shooter, const Vec3& p) {
   const Vec3 d = p - shooter.centre;
-  double w = glm::dot(shooter.normal, d);
-  // Make the sign of w the exact side of p relative to the shooter's plane.
+  // w = normal . d, with the sign of the exact side of p relative to the shooter's plane.
+  bool certain = false;
+  double w = side_of_plane_value(shooter.centre, shooter.normal, p, certain);
+  if (certain) return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
   const Sign side = side_of_plane(shooter.centre, shooter.normal, p);
   if (side == Sign::kZero) {
     w = 0.0;
