@@ -342,6 +342,35 @@ TEST(AreaRasterizer, raster_cut_pieces_add_up_to_whole) {
   EXPECT_GT(covered, 1000);
 }
 
+// Polygons inside one pixel take a shortcut past the cells (area_rasterizer.cpp, single_pixel_area). Placed in
+// random pixels, some against the pixel's left or bottom line, the viewport's left or bottom border, or the
+// pixel's top line (which the shortcut leaves to the traversal), they must match the exact areas like any other
+// polygon and add up with their fan triangles.
+TEST(AreaRasterizer, raster_polygons_inside_one_pixel_match_exact) {
+  AreaRasterizer rasterizer(kWidth, kHeight);
+  Random random(7004);
+  for (int k = 0; k < 2000; ++k) {
+    std::vector<Vec2> polygon = k % 2 ? random_star(random, {0.0, 0.0}, 1.0) : random_convex(random, {0.0, 0.0}, 1.0);
+    double min_x = polygon[0].x, max_x = min_x, min_y = polygon[0].y, max_y = min_y;
+    for (const Vec2& v : polygon) {
+      min_x = std::min(min_x, v.x), max_x = std::max(max_x, v.x);
+      min_y = std::min(min_y, v.y), max_y = std::max(max_y, v.y);
+    }
+    // Scale the box to an extent of at most 0.9 and place it in a random pixel, at a random offset or on a line.
+    const double scale = 0.9 * random.uniform(0.05, 1.0) / std::max(max_x - min_x, max_y - min_y);
+    const int px = k % 7 == 0 ? 0 : random.integer(0, kWidth - 1), py = k % 5 == 0 ? 0 : random.integer(0, kHeight - 1);
+    const double width = scale * (max_x - min_x), height = scale * (max_y - min_y);
+    const int placement = k % 4;  // 0: anywhere; 1: on the left line; 2: on the bottom line; 3: on the top line
+    const double ox = px + (placement == 1 ? 0.0 : random.uniform(0.0, 1.0 - width));
+    const double oy = placement == 2 ? py : placement == 3 ? py + 1.0 - height : py + random.uniform(0.0, 1.0 - height);
+    for (Vec2& v : polygon) v = {ox + scale * (v.x - min_x), oy + scale * (v.y - min_y)};
+    expect_exact(rasterizer, polygon, 1e-15);
+    std::vector<std::vector<Vec2>> fan;
+    for (std::size_t i = 1; i + 1 < polygon.size(); ++i) fan.push_back({polygon[0], polygon[i], polygon[i + 1]});
+    if (k % 2 == 0) expect_pieces_add_up(rasterizer, polygon, fan, k);  // the star's fan is not a partition
+  }
+}
+
 // ---- Degenerate cases of part 4, one test each --------------------------------------------------------
 
 TEST(AreaRasterizerDegenerate, raster_vertex_on_pixel_corner) {
