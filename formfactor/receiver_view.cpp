@@ -29,6 +29,29 @@ void ReceiverView::reserve(std::size_t receivers, std::size_t vertices) {
   corner_points_.reserve(vertices);
 }
 
+void ReceiverView::start_from_points_of(const ReceiverView& other) {
+  clear();
+  points_ = other.points_;
+  point_of_key_ = other.point_of_key_;
+}
+
+void ReceiverView::append_from(const ReceiverView& other, std::uint32_t first, std::uint32_t last) {
+  if (first >= last) return;
+  const std::uint32_t begin = other.offsets_[first], end = other.offsets_[last];
+  const std::uint32_t base = offsets_.back();
+  vertices_.insert(vertices_.end(), other.vertices_.begin() + begin, other.vertices_.begin() + end);
+  corner_points_.insert(corner_points_.end(), other.corner_points_.begin() + begin,
+                        other.corner_points_.begin() + end);
+  for (std::uint32_t i = first; i < last; ++i) {
+    const std::uint32_t next = other.offsets_[i + 1];
+    offsets_.push_back(base + (next - begin));
+    max_polygon_size_ = std::max<std::size_t>(max_polygon_size_, next - other.offsets_[i]);
+  }
+  planes_.insert(planes_.end(), other.planes_.begin() + first, other.planes_.begin() + last);
+  surfaces_.insert(surfaces_.end(), other.surfaces_.begin() + first, other.surfaces_.begin() + last);
+  patches_.insert(patches_.end(), other.patches_.begin() + first, other.patches_.begin() + last);
+}
+
 std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
                                 std::uint32_t patch) {
   for (const Vec3& p : polygon) {

@@ -32,6 +32,12 @@ class ReceiverView {
   std::uint32_t add(std::span<const Vec3> polygon, std::span<const std::uint32_t> keys, const Plane& plane,
                     std::uint32_t surface, std::uint32_t patch);
 
+  // Empties the view but keeps the points (and keys) of `other`, so that receivers of `other` can be copied
+  // with append_from() and new ones added with keys against the same points.
+  void start_from_points_of(const ReceiverView& other);
+  // Appends receivers [first, last) of `other`, which must be the view this one started from, in order.
+  void append_from(const ReceiverView& other, std::uint32_t first, std::uint32_t last);
+
   std::size_t size() const { return planes_.size(); }
   // The most corners of any receiver (0 when empty).
   std::size_t max_polygon_size() const { return max_polygon_size_; }

@@ -1,6 +1,11 @@
 // The receivers a form-factor back end sees, built from the leaf elements of the hierarchy and rebuilt only
 // when the leaf set changes (Hierarchy::revision()). Receiver i is leaf leaf(i); a leaf's receiver index is
 // receiver(node). Receivers follow the hierarchy's deterministic leaf order (by node id).
+//
+// After splits, the view is not built again from the mesh: leaves only split and new nodes get larger ids, so
+// the new leaf order is the old one without the split leaves, followed by the new leaves. The receivers of the
+// leaves that stayed are copied from the old view in runs, and only the new leaves are read from the hierarchy.
+// The result is the same view as a fresh build (the points may be numbered differently).
 #pragma once
 
 #include "formfactor/receiver_view.h"
@@ -16,7 +21,7 @@ inline constexpr std::uint32_t kNoReceiver = 0xffffffffu;
 
 class ReceiverCache {
  public:
-  // Rebuilds the view when the hierarchy's revision differs from the cached one (or on first use);
+  // Rebuilds the view when the hierarchy or its revision differs from the cached one (or on first use);
   // returns true when it rebuilt.
   bool update(const mesh::Hierarchy& hierarchy);
 
@@ -30,13 +35,25 @@ class ReceiverCache {
   }
   std::uint64_t revision() const { return revision_; }
   std::uint64_t rebuilds() const { return rebuilds_; }
+  // How many of those rebuilds copied the receivers that stayed from the previous view (after splits).
+  std::uint64_t incremental_rebuilds() const { return incremental_rebuilds_; }
 
  private:
-  formfactor::ReceiverView view_;
+  void rebuild(const mesh::Hierarchy& hierarchy);
+  // Builds next_ from view_ after splits; false when the hierarchy did not change by splits alone.
+  bool update_after_splits(const mesh::Hierarchy& hierarchy, const std::vector<mesh::NodeId>& leaves);
+  void add_leaf(formfactor::ReceiverView& view, const mesh::Hierarchy& hierarchy, mesh::NodeId leaf);
+
+  formfactor::ReceiverView view_, next_;
+  std::vector<Vec3> corners_;
+  const mesh::Hierarchy::Impl* source_ = nullptr;  // the hierarchy view_ was built from (its state, which a
+                                                   // move-assignment replaces)
+  std::size_t node_count_ = 0;               // its node count then
   std::vector<mesh::NodeId> leaves_;
   std::vector<std::uint32_t> receiver_of_node_;
   std::uint64_t revision_ = 0;
   std::uint64_t rebuilds_ = 0;
+  std::uint64_t incremental_rebuilds_ = 0;
   bool built_ = false;
 };
 
