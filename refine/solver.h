@@ -152,11 +152,16 @@ class Solver {
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
   // Per receiver, valid for hierarchy revision tables_revision_: edge-neighbours (receiver indices, CSR) and
-  // emission.
+  // emission; table_leaves_ are the leaves they were built for (by receiver, so sorted by node id).
   std::vector<std::uint32_t> neighbour_offsets_;
   std::vector<std::uint32_t> neighbours_;
   std::vector<Rgb> emission_;
+  std::vector<mesh::NodeId> table_leaves_;
   std::uint64_t tables_revision_ = ~std::uint64_t{0};
+  const mesh::Hierarchy::Impl* tables_source_ = nullptr;
+  std::vector<std::uint32_t> next_offsets_, next_neighbours_;  // the tables being built
+  std::vector<Rgb> next_emission_;
+  std::vector<mesh::NodeId> around_;
   // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it, with the
   // areas' inverses (times the sign of the deposit when receive() builds one).
   struct Deposit {
