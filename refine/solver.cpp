@@ -17,7 +17,12 @@
 
 #include "core/error.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -343,24 +348,41 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   // is a heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
   // neighbours); leaves made by splits are asked of the hierarchy directly.
   update_receiver_tables();
-  double largest = 0.0;
+  // Both loops run in parallel and give the same result whatever the thread count: a maximum, and a set of flags
+  // (a flag may be set by two threads at once, to the same value).
   luminance_.resize(cache_.size());
-  for (std::size_t i = 0; i < cache_.size(); ++i) {
-    const Rgb& b = hierarchy_.radiosity(cache_.leaf(i));
-    luminance_[i] = b.luminance();
-    largest = std::max(largest, (b - emission_[i]).luminance());
-  }
+  const double largest = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& range, double partial) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Rgb& b = hierarchy_.radiosity(cache_.leaf(i));
+          luminance_[i] = b.luminance();
+          partial = std::max(partial, (b - emission_[i]).luminance());
+        }
+        return partial;
+      },
+      [](double a, double b) { return std::max(a, b); });
   std::vector<mesh::NodeId> candidates;
   double threshold = options_.gradient * largest;
   if (threshold > 0.0) {
     candidate_flag_.assign(cache_.size(), 0);
-    for (std::uint32_t r : touched_) {
-      const double own = luminance_[r];
-      for (std::uint32_t k = neighbour_offsets_[r]; k < neighbour_offsets_[r + 1]; ++k) {
-        const std::uint32_t neighbour = neighbours_[k];
-        if (std::abs(own - luminance_[neighbour]) > threshold) candidate_flag_[r] = candidate_flag_[neighbour] = 1;
-      }
-    }
+    const auto flag = [this](std::uint32_t r) {
+      std::atomic_ref<std::uint8_t>(candidate_flag_[r]).store(1, std::memory_order_relaxed);
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_.size(), 1024),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                          const std::uint32_t r = touched_[t];
+                          const double own = luminance_[r];
+                          for (std::uint32_t k = neighbour_offsets_[r]; k < neighbour_offsets_[r + 1]; ++k) {
+                            const std::uint32_t neighbour = neighbours_[k];
+                            if (std::abs(own - luminance_[neighbour]) > threshold) {
+                              flag(r);
+                              flag(neighbour);
+                            }
+                          }
+                        }
+                      });
     for (std::size_t r = 0; r < cache_.size(); ++r)
       if (candidate_flag_[r] != 0) candidates.push_back(cache_.leaf(r));  // by node id, as leaves are
   }
