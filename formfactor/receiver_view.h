@@ -67,8 +67,8 @@ class ReceiverView {
   std::vector<std::uint32_t> patches_;
   std::vector<Vec3> points_;
   std::vector<std::uint32_t> corner_points_;  // per corner: index into points_
-  std::vector<std::uint32_t> point_of_key_;
-  std::size_t max_polygon_size_ = 0;   // per caller key: index into points_, or kNoPoint
+  std::vector<std::uint32_t> point_of_key_;  // per caller key: index into points_, or kNoPoint
+  std::size_t max_polygon_size_ = 0;
   static constexpr std::uint32_t kNoPoint = 0xFFFFFFFFu;
 };
 

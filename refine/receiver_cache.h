@@ -39,7 +39,6 @@ class ReceiverCache {
   std::uint64_t incremental_rebuilds() const { return incremental_rebuilds_; }
 
  private:
-  void rebuild(const mesh::Hierarchy& hierarchy);
   // Builds next_ from view_ after splits; false when the hierarchy did not change by splits alone.
   bool update_after_splits(const mesh::Hierarchy& hierarchy, const std::vector<mesh::NodeId>& leaves);
   void add_leaf(formfactor::ReceiverView& view, const mesh::Hierarchy& hierarchy, mesh::NodeId leaf);

@@ -288,49 +288,18 @@ double Solver::largest_reflected_luminance() const {
 }
 
 void Solver::update_receiver_tables() {
-  if (tables_revision_ == cache_.revision() && tables_source_ == &hierarchy_.impl()) return;
-  // Leaves only split, so a leaf that was in the previous tables has the same edge-neighbours unless one of them
-  // was split since (the only way its face loop gains a neighbour): its list is copied, renumbered, and only new
-  // leaves and leaves next to a split are asked of the hierarchy. Both lists are sorted by node id.
-  const bool same_hierarchy = tables_source_ == &hierarchy_.impl();
-  next_offsets_.assign(1, 0);
-  next_neighbours_.clear();
-  next_emission_.resize(cache_.size());
-  std::size_t old = 0;
-  for (std::size_t i = 0; i < cache_.size(); ++i) {
-    const mesh::NodeId leaf = cache_.leaf(i);
-    while (same_hierarchy && old < table_leaves_.size() && table_leaves_[old] < leaf) ++old;
-    bool copied = same_hierarchy && old < table_leaves_.size() && table_leaves_[old] == leaf;
-    if (copied) {
-      const std::size_t mark = next_neighbours_.size();
-      for (std::uint32_t k = neighbour_offsets_[old]; k < neighbour_offsets_[old + 1]; ++k) {
-        const std::uint32_t receiver = cache_.receiver(table_leaves_[neighbours_[k]]);
-        if (receiver == kNoReceiver) {  // that neighbour was split
-          next_neighbours_.resize(mark);
-          copied = false;
-          break;
-        }
-        next_neighbours_.push_back(receiver);
-      }
-      if (copied) next_emission_[i] = emission_[old];
-    }
-    if (!copied) {
-      hierarchy_.edge_neighbours(leaf, around_);
-      for (mesh::NodeId neighbour : around_) next_neighbours_.push_back(cache_.receiver(neighbour));
-      next_emission_[i] = material(leaf).emission;
-    }
-    next_offsets_.push_back(static_cast<std::uint32_t>(next_neighbours_.size()));
-  }
-  std::swap(neighbour_offsets_, next_offsets_);
-  std::swap(neighbours_, next_neighbours_);
-  std::swap(emission_, next_emission_);
-  table_leaves_.assign(cache_.leaves().begin(), cache_.leaves().end());
-  tables_revision_ = cache_.revision();
-  tables_source_ = &hierarchy_.impl();
+  neighbours_.update(hierarchy_, cache_);
+  if (emission_revision_ == cache_.revision() && emission_source_ == &hierarchy_.impl()) return;
+  // Emission by surface, then by receiver.
+  const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();
+  emission_.resize(cache_.size());
+  for (std::size_t i = 0; i < cache_.size(); ++i) emission_[i] = scene_.material_of_surface(surfaces[i]).emission;
+  emission_revision_ = cache_.revision();
+  emission_source_ = &hierarchy_.impl();
 }
 
 void Solver::update_deposits() {
-  if (deposits_revision_ == cache_.revision()) return;
+  if (deposits_revision_ == cache_.revision() && deposits_source_ == &hierarchy_.impl()) return;
   deposits_.resize(cache_.size());
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     const mesh::NodeId leaf = cache_.leaf(i);
@@ -338,6 +307,7 @@ void Solver::update_deposits() {
     deposits_[i] = {material(leaf).reflectance, 1.0 / hierarchy_.area(leaf), 1.0 / hierarchy_.area(patch), leaf, patch};
   }
   deposits_revision_ = cache_.revision();
+  deposits_source_ = &hierarchy_.impl();
 }
 
 void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
@@ -374,8 +344,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
                         for (std::size_t t = range.begin(); t != range.end(); ++t) {
                           const std::uint32_t r = touched_[t];
                           const double own = luminance_[r];
-                          for (std::uint32_t k = neighbour_offsets_[r]; k < neighbour_offsets_[r + 1]; ++k) {
-                            const std::uint32_t neighbour = neighbours_[k];
+                          for (const std::uint32_t neighbour : neighbours_.of(r)) {
                             if (std::abs(own - luminance_[neighbour]) > threshold) {
                               flag(r);
                               flag(neighbour);

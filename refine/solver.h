@@ -11,6 +11,7 @@
 #include "core/scene.h"
 #include "formfactor/backend.h"
 #include "mesh/hierarchy.h"
+#include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
 
 #include <cstdint>
@@ -151,17 +152,11 @@ class Solver {
   std::vector<mesh::NodeId> incident_written_;  // the nodes whose incident_ the current shot set
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
-  // Per receiver, valid for hierarchy revision tables_revision_: edge-neighbours (receiver indices, CSR) and
-  // emission; table_leaves_ are the leaves they were built for (by receiver, so sorted by node id).
-  std::vector<std::uint32_t> neighbour_offsets_;
-  std::vector<std::uint32_t> neighbours_;
+  // Per receiver: edge-neighbours (receiver indices), and emission (valid for revision emission_revision_).
+  NeighbourTable neighbours_;
   std::vector<Rgb> emission_;
-  std::vector<mesh::NodeId> table_leaves_;
-  std::uint64_t tables_revision_ = ~std::uint64_t{0};
-  const mesh::Hierarchy::Impl* tables_source_ = nullptr;
-  std::vector<std::uint32_t> next_offsets_, next_neighbours_;  // the tables being built
-  std::vector<Rgb> next_emission_;
-  std::vector<mesh::NodeId> around_;
+  std::uint64_t emission_revision_ = ~std::uint64_t{0};
+  const mesh::Hierarchy::Impl* emission_source_ = nullptr;
   // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it, with the
   // areas' inverses (times the sign of the deposit when receive() builds one).
   struct Deposit {
@@ -173,6 +168,7 @@ class Solver {
   };
   std::vector<Deposit> deposits_;
   std::uint64_t deposits_revision_ = ~std::uint64_t{0};
+  const mesh::Hierarchy::Impl* deposits_source_ = nullptr;
   // Per receiver, scratch of one substructuring step: radiosity luminance, and 1 when it is to be split.
   std::vector<double> luminance_;
   std::vector<std::uint8_t> candidate_flag_;

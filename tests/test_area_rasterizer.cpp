@@ -371,6 +371,33 @@ TEST(AreaRasterizer, raster_polygons_inside_one_pixel_match_exact) {
   }
 }
 
+// Inside one pixel, with edges lying along the pixel's left and bottom lines and along the viewport's left and
+// bottom borders (an edge on y = 0 is one the traversal only marks): exact areas, either winding.
+TEST(AreaRasterizer, raster_one_pixel_polygons_with_edges_on_lines) {
+  AreaRasterizer rasterizer(kWidth, kHeight);
+  struct Case {
+    std::vector<Vec2> polygon;
+    int x, y;
+    double area;
+  };
+  const std::vector<Case> cases = {
+      {{{3.0, 0.0}, {3.5, 0.0}, {3.0, 0.5}}, 3, 0, 0.125},                  // on x = 3 and on y = 0
+      {{{5.0, 4.0}, {5.75, 4.0}, {5.75, 4.5}, {5.0, 4.5}}, 5, 4, 0.375},    // on x = 5 and y = 4
+      {{{0.0, 2.25}, {0.5, 2.25}, {0.0, 2.75}}, 0, 2, 0.125},                // on the viewport's left border
+      {{{7.25, 0.0}, {7.75, 0.0}, {7.75, 0.5}, {7.5, 0.75}}, 7, 0, 0.25},    // base on y = 0, side on x = 7.75
+  };
+  for (const Case& c : cases) {
+    std::vector<Vec2> polygon = c.polygon;
+    for (int pass = 0; pass < 2; ++pass) {
+      const Rasterized got = run(rasterizer, polygon);
+      EXPECT_EQ(got.visits, 1);
+      EXPECT_EQ(got.image[static_cast<std::size_t>(c.y * kWidth + c.x)], c.area) << "pixel " << c.x << ", " << c.y;
+      std::reverse(polygon.begin(), polygon.end());
+    }
+    expect_exact(rasterizer, c.polygon, 1e-15);
+  }
+}
+
 // ---- Degenerate cases of part 4, one test each --------------------------------------------------------
 
 TEST(AreaRasterizerDegenerate, raster_vertex_on_pixel_corner) {

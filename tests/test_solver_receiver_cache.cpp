@@ -1,14 +1,18 @@
 // The solver's receiver cache (refine/receiver_cache.h): after splits it copies the receivers of the leaves that
 // stayed from its previous view and reads only the new leaves from the hierarchy. That view must be the one a
-// fresh build gives: the same receivers in the same order, corner for corner, with shared points that stand for
-// the same coordinates.
+// fresh build gives: the same receivers in the same order, corner for corner, with one shared point per distinct
+// corner position. The neighbour table (refine/neighbour_table.h) copies lists the same way and must equal the
+// hierarchy's edge-neighbours.
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
+#include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <random>
+#include <tuple>
 
 namespace aarad::refine {
 namespace {
@@ -30,11 +34,30 @@ void expect_same_view(const ReceiverCache& updated, const ReceiverCache& fresh) 
     EXPECT_EQ(a.surface(i), b.surface(i));
     EXPECT_EQ(a.patch(i), b.patch(i));
   }
-  // Every corner's point is the corner itself, and corners of one mesh vertex share a point.
-  for (std::size_t v = 0; v < a.vertices().size(); ++v) {
-    EXPECT_EQ(a.points()[a.corner_points()[v]], a.vertices()[v]) << "corner " << v;
-    EXPECT_EQ(b.points()[b.corner_points()[v]], b.vertices()[v]) << "corner " << v;
+  // Every corner's point is the corner itself, and the corners at one position of one surface (one mesh vertex)
+  // share a point.
+  for (const formfactor::ReceiverView* view : {&a, &b}) {
+    std::map<std::tuple<std::uint32_t, double, double, double>, std::uint32_t> point_at;
+    for (std::size_t i = 0; i < view->size(); ++i) {
+      for (std::uint32_t v = view->offsets()[i]; v < view->offsets()[i + 1]; ++v) {
+        const Vec3 p = view->vertices()[v];
+        const std::uint32_t point = view->corner_points()[v];
+        EXPECT_EQ(view->points()[point], p) << "corner " << v;
+        const auto [it, added] = point_at.try_emplace({view->surface(i), p.x, p.y, p.z}, point);
+        EXPECT_EQ(it->second, point) << "corner " << v;
+      }
+    }
   }
+}
+
+// Splits a few random leaves (at least one split succeeds), as a round of substructuring does.
+void split_some(mesh::Hierarchy& hierarchy, std::mt19937_64& rng, int count) {
+  int done = 0;
+  for (int attempt = 0; done < count && attempt < 1000; ++attempt) {
+    const std::vector<mesh::NodeId> leaves = hierarchy.leaves();
+    done += hierarchy.split(leaves[static_cast<std::size_t>(rng() % leaves.size())]).ok ? 1 : 0;
+  }
+  ASSERT_EQ(done, count);
 }
 
 TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
@@ -48,9 +71,7 @@ TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
     EXPECT_FALSE(cache.update(hierarchy));  // nothing changed
     std::mt19937_64 rng(balance ? 31 : 17);
     for (int round = 0; round < 12; ++round) {
-      // A few splits per round, as a round of substructuring makes.
-      const std::vector<mesh::NodeId> leaves = hierarchy.leaves();
-      for (int k = 0; k < 1 + round % 4; ++k) hierarchy.split(leaves[static_cast<std::size_t>(rng() % leaves.size())]);
+      split_some(hierarchy, rng, 1 + round % 4);
       ASSERT_TRUE(cache.update(hierarchy));
       ReceiverCache fresh;
       fresh.update(hierarchy);
@@ -59,6 +80,35 @@ TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
     }
     EXPECT_EQ(cache.incremental_rebuilds(), 12u) << "balance " << balance;
     EXPECT_GT(cache.size(), hierarchy.initial_element_count());
+  }
+}
+
+TEST(SolverReceiverCache, NeighbourTableAfterSplitsIsTheHierarchysAdjacency) {
+  for (const bool balance : {false, true}) {
+    const Scene scene = make_cornell_box();
+    mesh::MeshingOptions options;
+    options.balance = balance;
+    mesh::Hierarchy hierarchy(scene, options);
+    ReceiverCache cache;
+    NeighbourTable table;
+    std::mt19937_64 rng(balance ? 43 : 41);
+    std::vector<mesh::NodeId> around;
+    for (int round = 0; round < 40; ++round) {
+      // Splits clustered in a few places, so that neighbours of neighbours split too.
+      split_some(hierarchy, rng, 1 + round % 3);
+      if (HasFatalFailure()) return;
+      cache.update(hierarchy);
+      table.update(hierarchy, cache);
+      for (std::size_t i = 0; i < cache.size(); ++i) {
+        hierarchy.edge_neighbours(cache.leaf(i), around);
+        std::vector<std::uint32_t> expected;
+        for (mesh::NodeId n : around) expected.push_back(cache.receiver(n));
+        const auto got = table.of(i);
+        ASSERT_EQ(std::vector<std::uint32_t>(got.begin(), got.end()), expected) << "round " << round << " receiver " << i;
+      }
+    }
+    // Most lists were copied, not asked of the hierarchy: the copying was tested.
+    EXPECT_GT(table.copied_lists(), 30u * hierarchy.initial_element_count()) << "balance " << balance;
   }
 }
 
