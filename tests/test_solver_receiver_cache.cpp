@@ -60,12 +60,16 @@ void split_some(mesh::Hierarchy& hierarchy, std::mt19937_64& rng, int count) {
   ASSERT_EQ(done, count);
 }
 
+mesh::MeshingOptions meshing(bool balance) {
+  mesh::MeshingOptions options;
+  options.balance = balance;
+  return options;
+}
+
 TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
   for (const bool balance : {false, true}) {
     const Scene scene = make_cornell_box();
-    mesh::MeshingOptions options;
-    options.balance = balance;
-    mesh::Hierarchy hierarchy(scene, options);
+    mesh::Hierarchy hierarchy(scene, meshing(balance));
     ReceiverCache cache;
     ASSERT_TRUE(cache.update(hierarchy));
     EXPECT_FALSE(cache.update(hierarchy));  // nothing changed
@@ -86,9 +90,7 @@ TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
 TEST(SolverReceiverCache, NeighbourTableAfterSplitsIsTheHierarchysAdjacency) {
   for (const bool balance : {false, true}) {
     const Scene scene = make_cornell_box();
-    mesh::MeshingOptions options;
-    options.balance = balance;
-    mesh::Hierarchy hierarchy(scene, options);
+    mesh::Hierarchy hierarchy(scene, meshing(balance));
     ReceiverCache cache;
     NeighbourTable table;
     std::mt19937_64 rng(balance ? 43 : 41);
