@@ -287,24 +287,16 @@ double Solver::largest_reflected_luminance() const {
   return largest;
 }
 
-void Solver::update_receiver_tables() {
-  neighbours_.update(hierarchy_, cache_);
-  if (emission_revision_ == cache_.revision() && emission_source_ == &hierarchy_.impl()) return;
-  // Emission by surface, then by receiver.
-  const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();
-  emission_.resize(cache_.size());
-  for (std::size_t i = 0; i < cache_.size(); ++i) emission_[i] = scene_.material_of_surface(surfaces[i]).emission;
-  emission_revision_ = cache_.revision();
-  emission_source_ = &hierarchy_.impl();
-}
-
 void Solver::update_deposits() {
   if (deposits_revision_ == cache_.revision() && deposits_source_ == &hierarchy_.impl()) return;
   deposits_.resize(cache_.size());
+  emission_.resize(cache_.size());
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     const mesh::NodeId leaf = cache_.leaf(i);
     const mesh::NodeId patch = hierarchy_.patch(leaf);
-    deposits_[i] = {material(leaf).reflectance, 1.0 / hierarchy_.area(leaf), 1.0 / hierarchy_.area(patch), leaf, patch};
+    const Material& m = material(leaf);
+    deposits_[i] = {m.reflectance, 1.0 / hierarchy_.area(leaf), 1.0 / hierarchy_.area(patch), leaf, patch};
+    emission_[i] = m.emission;
   }
   deposits_revision_ = cache_.revision();
   deposits_source_ = &hierarchy_.impl();
@@ -317,7 +309,8 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   // threshold grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this
   // is a heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
   // neighbours); leaves made by splits are asked of the hierarchy directly.
-  update_receiver_tables();
+  neighbours_.update(hierarchy_, cache_);
+  update_deposits();
   // Both loops run in parallel and give the same result whatever the thread count: a maximum, and a set of flags
   // (a flag may be set by two threads at once, to the same value).
   luminance_.resize(cache_.size());

@@ -134,9 +134,7 @@ class Solver {
   double largest_reflected_luminance() const;
   // |dB| per channel: with the patch's area, what chooses the shooter and what the unshot fraction sums.
   Rgb unshot_magnitude(mesh::NodeId patch) const;
-  // Rebuilds the per-receiver tables (adjacency, emission) when the receiver view changed.
-  void update_receiver_tables();
-  // Rebuilds deposits_ when the receiver view changed.
+  // Rebuilds deposits_ and emission_ when the receiver view changed.
   void update_deposits();
 
   const Scene& scene_;
@@ -152,13 +150,10 @@ class Solver {
   std::vector<mesh::NodeId> incident_written_;  // the nodes whose incident_ the current shot set
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
-  // Per receiver: edge-neighbours (receiver indices), and emission (valid for revision emission_revision_).
+  // Per receiver: edge-neighbours (receiver indices).
   NeighbourTable neighbours_;
-  std::vector<Rgb> emission_;
-  std::uint64_t emission_revision_ = ~std::uint64_t{0};
-  const mesh::Hierarchy::Impl* emission_source_ = nullptr;
   // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it, with the
-  // areas' inverses (times the sign of the deposit when receive() builds one).
+  // areas' inverses (times the sign of the deposit when receive() builds one), and its emission.
   struct Deposit {
     Rgb reflectance;
     double inverse_area = 0.0;        // 1 / A_e
@@ -167,6 +162,7 @@ class Solver {
     mesh::NodeId patch = 0;
   };
   std::vector<Deposit> deposits_;
+  std::vector<Rgb> emission_;
   std::uint64_t deposits_revision_ = ~std::uint64_t{0};
   const mesh::Hierarchy::Impl* deposits_source_ = nullptr;
   // Per receiver, scratch of one substructuring step: radiosity luminance, and 1 when it is to be split.
