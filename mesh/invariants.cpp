@@ -334,11 +334,39 @@ class Checker {
       if (std::abs(sum - m_.area[n]) > kAreaTolerance * m_.area[n])
         report("children-tile-parent", n, "children of node ", n, " cover ", sum, " of its area ", m_.area[n],
                " (relative ", (sum - m_.area[n]) / m_.area[n], ")");
-      for (std::size_t i = 0; i < children_2d.size(); ++i)
-        for (std::size_t j = i + 1; j < children_2d.size(); ++j)
-          if (overlap(children_2d[i], children_2d[j]))
-            report("children-tile-parent", children[i], "children ", children[i], " and ", children[j], " of node ",
-                   n, " overlap");
+      // Pairs of children, swept by the left end of their x ranges (a patch can have thousands of initial
+      // elements). A pair whose bounding boxes overlap by less than half the tolerance along x or y is skipped:
+      // the overlap test measures penetration along edge normals, and for convex polygons the least of those is
+      // at most the penetration along any axis, so it would call the pair separated too.
+      const double slack = 0.5 * length_tolerance_;
+      boxes_.clear();
+      for (const std::vector<Vec2>& child : children_2d) {
+        Box box{child.front(), child.front()};
+        for (const Vec2& p : child) {
+          box.low = glm::min(box.low, p);
+          box.high = glm::max(box.high, p);
+        }
+        boxes_.push_back(box);
+      }
+      order_.resize(children_2d.size());
+      for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+      std::sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) {
+        return boxes_[a].low.x < boxes_[b].low.x || (boxes_[a].low.x == boxes_[b].low.x && a < b);
+      });
+      for (std::size_t a = 0; a < order_.size(); ++a) {
+        const std::size_t i = order_[a];
+        for (std::size_t b = a + 1; b < order_.size(); ++b) {
+          const std::size_t j = order_[b];
+          if (boxes_[i].high.x - boxes_[j].low.x < slack) break;  // nor any later child
+          if (std::min(boxes_[i].high.y, boxes_[j].high.y) - std::max(boxes_[i].low.y, boxes_[j].low.y) < slack)
+            continue;
+          if (overlap(children_2d[i], children_2d[j])) {
+            const std::size_t first = std::min(i, j), second = std::max(i, j);
+            report("children-tile-parent", children[first], "children ", children[first], " and ", children[second],
+                   " of node ", n, " overlap");
+          }
+        }
+      }
     }
   }
 
@@ -400,6 +428,12 @@ class Checker {
   const LeafMesh& mesh_;
   double length_tolerance_ = 0.0;
   std::vector<Violation> violations_;
+  // Scratch of check_tiling: the 2D bounding box of every child of one node, and their sweep order.
+  struct Box {
+    Vec2 low, high;
+  };
+  std::vector<Box> boxes_;
+  std::vector<std::size_t> order_;
 };
 
 }  // namespace

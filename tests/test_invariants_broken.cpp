@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 namespace aarad::mesh {
 namespace {
 
@@ -53,6 +55,29 @@ TEST(InvariantBroken, ChildrenOverlap) {
   bool overlap = false;
   for (const auto& v : violations) overlap |= v.invariant == "children-tile-parent" && v.message.find("overlap") != std::string::npos;
   EXPECT_TRUE(overlap) << describe(violations);
+}
+
+TEST(InvariantBroken, ChildrenOverlapAmongManyInitialElements) {
+  // One patch of 20 x 10 initial elements (the sweep over their x ranges, not the four children of a split);
+  // its last element claims the corners of its first, so two children far apart in index order overlap.
+  MeshingOptions o;
+  o.patch_size = 2.0;
+  o.element_size = 0.1;
+  Hierarchy h(test::rectangle_scene(), o);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  const NodeId patch = h.patches()[0];
+  const auto children = h.children(patch);
+  ASSERT_GE(children.size(), 100u);
+  Hierarchy::Impl& m = h.impl();
+  m.corners[children.back()] = m.corners[children.front()];
+  const auto violations = check_invariants(h);
+  bool named = false;
+  for (const auto& v : violations)
+    named |= v.invariant == "children-tile-parent" && v.node == children.front() &&
+             v.message.find("children " + std::to_string(children.front()) + " and " +
+                            std::to_string(children.back()) + " of node " + std::to_string(patch) + " overlap") !=
+                 std::string::npos;
+  EXPECT_TRUE(named) << describe(violations);
 }
 
 TEST(InvariantBroken, ChildOutsideItsParentOrPlane) {
