@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <string>
 #include <utility>
@@ -238,13 +239,30 @@ MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options
   MeshingOptions resolved = options;
   const double d = scene.diagonal();
   if (!(d > 0.0)) throw Error("meshing: the scene has no extent (diagonal " + std::to_string(d) + ")");
-  if (options.patch_size < 0.0 || options.element_size < 0.0 || options.min_area < 0.0)
-    throw Error("meshing: patch_size, element_size and min_area must be >= 0 (0 picks a default)");
+  const auto valid = [](double size) { return std::isfinite(size) && size >= 0.0; };
+  if (!valid(options.patch_size) || !valid(options.element_size) || !valid(options.min_area))
+    throw Error("meshing: patch_size, element_size and min_area must be finite and >= 0 (0 picks a default)");
   if (options.max_level < 1 || options.max_level > 60)
     throw Error("meshing: max_level must lie in [1, 60], got " + std::to_string(options.max_level));
   if (resolved.patch_size == 0.0) resolved.patch_size = d / 8.0;
   if (resolved.element_size == 0.0) resolved.element_size = resolved.patch_size / 2.0;
   if (resolved.min_area == 0.0) resolved.min_area = 1e-7 * d * d;
+  // Refuse sizes that would exhaust memory (or overflow the grid counts) before meshing starts. A triangle with
+  // edges of length s has area 0.433 s^2 and a square s^2, so area / (0.4 s^2) is about the count or more.
+  double area = 0.0;
+  for (const Surface& surface : scene.surfaces) area += surface.area;
+  const auto refuse_if_too_many = [&](const char* article, const char* option, const char* items, double size) {
+    const double estimate = area / (0.4 * size * size);
+    if (!(estimate <= options.max_initial_elements)) {
+      char text[256];
+      std::snprintf(text, sizeof text,
+                    "meshing: %s %s of %g would make about %.3g initial %s (the limit is %.3g); choose a larger %s",
+                    article, option, size, estimate, items, options.max_initial_elements, option);
+      throw Error(text);
+    }
+  };
+  refuse_if_too_many("a", "patch size", "patches", resolved.patch_size);
+  refuse_if_too_many("an", "element size", "elements", std::min(resolved.element_size, resolved.patch_size));
   return resolved;
 }
 

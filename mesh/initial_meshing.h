@@ -12,8 +12,8 @@
 namespace aarad::mesh {
 
 // Defaults relative to the scene diagonal d: patch_size = d / 8, element_size = patch_size / 2,
-// min_area = 1e-7 d^2. Fields that are not zero are kept. Throws aarad::Error for negative sizes or a
-// max_level outside [1, 60].
+// min_area = 1e-7 d^2. Fields that are not zero are kept. Throws aarad::Error for negative or non-finite sizes,
+// a max_level outside [1, 60], or sizes that would make more than max_initial_elements patches or elements.
 MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options);
 
 // A polygon of 3 or 4 point indices, counter-clockwise seen from the surface's front; [3] = -1 for a triangle.

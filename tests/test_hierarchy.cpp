@@ -1,6 +1,7 @@
 // Targeted tests of the patch/element hierarchy: initial meshing counts, splits, midpoint reuse, refusal,
 // balance, neighbours and radiosity inheritance. Expected numbers follow from the scene geometry by hand.
 #include "core/builtin_scenes.h"
+#include "core/error.h"
 #include "mesh/hierarchy.h"
 #include "mesh/initial_meshing.h"
 #include "mesh/invariants.h"
@@ -11,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
 
 namespace aarad::mesh {
 namespace {
@@ -42,6 +45,31 @@ TEST(Hierarchy, DefaultsAreRelativeToTheSceneDiagonal) {
   EXPECT_EQ(h.patches().size(), 36u);
   EXPECT_EQ(h.initial_element_count(), 144u);
   EXPECT_EQ(h.leaf_count(), 144u);
+}
+
+TEST(Hierarchy, SizesThatWouldExhaustMemoryOrAreNotFiniteAreRefused) {
+  const Scene scene = test::square_scene();  // area 1: about 1 / (0.4 s^2) elements of size s
+  const auto message = [&](const MeshingOptions& o) -> std::string {
+    try {
+      resolve_options(scene, o);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return {};
+  };
+  MeshingOptions o = sizes(0.5, 1e-4);  // about 2.5e8 elements
+  EXPECT_NE(message(o).find("element size of 0.0001 would make about 2.5e+08 initial elements"), std::string::npos)
+      << message(o);
+  o = sizes(1e-9, 1e-9);  // would overflow the grid counts
+  EXPECT_NE(message(o).find("patch size of 1e-09"), std::string::npos) << message(o);
+  o = sizes(0.5, 1e-3);  // 2.5e6 elements: over the default limit, allowed under a larger one
+  EXPECT_NE(message(o).find("the limit is 2e+06"), std::string::npos) << message(o);
+  o.max_initial_elements = 3e6;
+  EXPECT_EQ(message(o), "");
+  for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -1.0}) {
+    EXPECT_NE(message(sizes(bad, 0.1)).find("finite and >= 0"), std::string::npos);
+    EXPECT_NE(message(sizes(0.5, bad)).find("finite and >= 0"), std::string::npos);
+  }
 }
 
 TEST(Hierarchy, ConvexQuadBecomesABilinearGridOfQuads) {
