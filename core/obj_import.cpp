@@ -63,6 +63,27 @@ std::optional<double> parse_number(const std::string& token) {
   return value;
 }
 
+// Whether a token of an `f` line has the form v, v/vt, v//vn or v/vt/vn, each a nonzero whole number (the
+// range of v is checked later, against the vertices read).
+bool vertex_reference(const std::string& token) {
+  std::size_t at = 0;
+  const auto whole_number = [&](bool optional) {
+    const std::size_t start = at;
+    if (at < token.size() && (token[at] == '-' || token[at] == '+')) ++at;
+    const std::size_t digits = at;
+    while (at < token.size() && token[at] >= '0' && token[at] <= '9') ++at;
+    if (at == digits) return optional && at == start;
+    return token.find_first_not_of("+-0", start) < at;  // not zero
+  };
+  if (!whole_number(false)) return false;
+  for (int part = 0; part < 2 && at < token.size(); ++part) {
+    if (token[at] != '/') return false;
+    ++at;
+    if (!whole_number(part == 0)) return false;  // only the texture index may be empty (v//vn)
+  }
+  return at == token.size();
+}
+
 std::string number_text(double v) {
   std::ostringstream out;
   out.precision(10);
@@ -130,6 +151,11 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       }
       text.positions.push_back(p);
     } else if (key == "f") {
+      for (std::size_t i = 1; i < t.size(); ++i) {
+        if (!vertex_reference(t[i]))
+          throw InputError(path, number, "face vertex '" + t[i] + "' is not a vertex reference; write v, v/vt, "
+                                         "v//vn or v/vt/vn with whole numbers (negative ones count from the end)");
+      }
       if (t.size() < 4) {
         warnings.push_back(InputError::format(path, number, "face with fewer than three vertices skipped; give it "
                                                             "at least three vertices or remove it"));

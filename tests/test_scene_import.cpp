@@ -141,6 +141,18 @@ TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
   EXPECT_NE(e.message().find("out of range"), std::string::npos);
 }
 
+TEST_F(SceneImport, import_face_with_a_token_that_is_not_a_vertex_reference_is_error_with_line) {
+  const std::string vertices = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+  for (const char* face : {"f 1 2 x 4", "f 1 2 3 4x", "f 1 2 3 0", "f 1/ 2 3 4/1/", "f 1//2/ 2 3", "f 1 2 3 4.5"}) {
+    const InputError e = import_error(write("token.obj", vertices + "# faces\n" + face + "\n"));
+    EXPECT_EQ(e.line(), 6) << face;
+    EXPECT_NE(e.message().find("not a vertex reference"), std::string::npos) << face << ": " << e.message();
+  }
+  // Every form OBJ allows: v, v/vt, v//vn, v/vt/vn, negative (relative) indices.
+  const std::string ok = vertices + "vt 0 0\nvn 0 0 1\nf 1 2/1 3//1 -1/1/1\n";
+  EXPECT_EQ(import_obj(write("forms.obj", ok)).faces.size(), 1u);
+}
+
 TEST_F(SceneImport, import_self_intersecting_face_is_error_with_line) {
   // Planar bow-ties: a symmetric one (its signed area is zero) and a lopsided one, in a tilted plane.
   const std::string head = "v 0 0 0\nv 1 1 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv 3 2 3\nv 3 0 3\nv 0 1 0\n";
