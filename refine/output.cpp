@@ -8,7 +8,10 @@
 
 #include <chrono>
 #include <fstream>
+#include <string>
 #include <system_error>
+
+#include <unistd.h>
 
 namespace aarad::refine {
 
@@ -21,6 +24,20 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
     areas.push_back(hierarchy.area(leaf));
   }
   return ToneMap::from_percentile(values, areas, 0.99);
+}
+
+void prepare_output_directory(const std::filesystem::path& directory) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  fs::create_directories(directory, error);
+  if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
+  if (!fs::is_directory(directory, error)) throw Error(directory.string() + " is not a directory");
+  const fs::path probe = directory / (".aarad-probe-" + std::to_string(::getpid()));
+  {
+    std::ofstream out(probe, std::ios::binary | std::ios::trunc);
+    if (!out) throw Error("cannot write files in " + directory.string());
+  }
+  fs::remove(probe, error);
 }
 
 OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,

@@ -10,6 +10,7 @@
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <utility>
 
 namespace {
 
@@ -116,6 +117,53 @@ TEST(Cli, UnknownOptionAndBadResolutionExitTwo) {
     EXPECT_EQ(r.code, 2) << command;
     EXPECT_NE(r.err.find("--relaxation"), std::string::npos) << command << ": " << r.err;
   }
+}
+
+TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"solve --gradient 0", "must be a finite number > 0"},     {"solve --gradient -1", "must be a finite number > 0"},
+      {"solve --gradient nan", "must be a finite number > 0"},   {"solve --converge nan", "must be a number in [0, 1]"},
+      {"solve --converge 1.5", "must be a number in [0, 1]"},    {"solve --patch-size inf", "must be a finite number > 0"},
+      {"solve --element-size -2", "must be a finite number > 0"}, {"solve --min-area 0", "must be a finite number > 0"},
+      {"solve --threads -1", "must be a finite number >= 0"},    {"solve --max-shots -3", "must be a finite number >= 0"},
+      {"solve --relaxation nan", "must be a number in [1, 2)"},
+  };
+  for (const auto& [command, expected] : cases) {
+    const ProgramRun r = aarad(command);
+    EXPECT_EQ(r.code, 2) << command;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << command << ": " << r.err;
+    EXPECT_LT(r.err.size(), 200u) << command << ": " << r.err;  // no 300-digit bound
+  }
+}
+
+TEST(Cli, UnknownCommandIsNamed) {
+  const ProgramRun r = aarad("bogus");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown command 'bogus'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("solve"), std::string::npos) << r.err;
+}
+
+TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving) {
+  const fs::path dir = work_dir();
+  // Far more initial elements than memory holds: refused at once, nothing written.
+  ProgramRun r = aarad("solve cornell --element-size 0.01 --out " + (dir / "fine").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("element size of 0.01 would make about"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "fine"));
+  // An output path below a regular file.
+  const fs::path file = write_file("a_file", "x");
+  r = aarad("solve office --out " + (file / "out").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("cannot create directory"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("shot"), std::string::npos) << r.err;  // refused before the first shot
+  // Nothing emits: its material library is missing, so every face gets the default grey.
+  const fs::path dark = write_file("dark.obj", "mtllib missing.mtl\nusemtl lamp\n"
+                                               "o quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  r = aarad("solve " + dark.string() + " --out " + (dir / "dark").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("nothing in the scene emits light"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("missing.mtl"), std::string::npos) << r.err;  // the warning that explains it
+  EXPECT_FALSE(fs::exists(dir / "dark"));
 }
 
 TEST(Cli, FormfactorsFromTheLightAsJson) {

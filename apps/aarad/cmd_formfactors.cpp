@@ -54,7 +54,10 @@ void run_formfactors(const FormFactorsOptions& options) {
   if (!from) {
     std::string known;
     for (const Group& g : scene.groups) known += (known.empty() ? "" : ", ") + g.name;
-    throw Error("scene '" + scene.name + "' has no group '" + options.from + "'; its groups are: " + known);
+    std::string message = "scene '" + scene.name + "' has no group '" + options.from + "'; its groups are: " + known;
+    // A group whose faces were all skipped on import (zero area, too few vertices) is not in the scene.
+    if (!scene.warnings.empty()) message += " (faces skipped on import belong to no group: see the warnings above)";
+    throw Error(message);
   }
   const formfactor::Shooter shooter = shooter_of_group(scene, *from);
   const std::unique_ptr<formfactor::FormFactorBackend> backend =

@@ -23,6 +23,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -140,6 +141,13 @@ void run_solve(SolveCommandOptions options) {
   const std::filesystem::path out = options.out.empty() ? default_out_directory(scene) : options.out;
 
   refine::Solver solver(scene, solver_options);
+  if (!(solver.emitted_flux().sum() > 0.0)) {
+    throw Error(scene.name + ": nothing in the scene emits light (no material with Ke above 0), so the solution "
+                "would be black" +
+                (scene.warnings.empty() || options.quiet ? std::string() : " (see the warnings above)"));
+  }
+  // Refuse an output directory that cannot be written now, not after the solve.
+  refine::prepare_output_directory(out);
   const bool show_progress = !options.quiet;
   if (show_progress) {
     std::fprintf(stderr, "aarad: %s: %zu patches, %zu elements; %s at resolution %d\n", scene.name.c_str(),
@@ -192,6 +200,8 @@ void run_solve(SolveCommandOptions options) {
 
 void add_solve_command(CLI::App& app) {
   auto options = std::make_shared<SolveCommandOptions>();
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  const CLI::Validator positive = number_in(0.0, End::kOpen, kInfinity, End::kOpen);
   CLI::App* cmd = app.add_subcommand(
       "solve", "Progressive-refinement radiosity with adaptive substructuring; writes mesh, images and report");
   cmd->add_option("scene", options->scene, "Built-in scene (cornell, office, furnace) or OBJ file")
@@ -202,43 +212,38 @@ void add_solve_command(CLI::App& app) {
       ->check(CLI::Range(2, 8192))
       ->capture_default_str();
   cmd->add_option("--converge", options->solver.converge, "Stop when unshot flux < this x emitted flux")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(number_in(0.0, End::kClosed, 1.0, End::kClosed))
       ->capture_default_str();
   cmd->add_option("--max-shots", options->solver.max_shots, "Stop after this many shots")
-      ->check(CLI::NonNegativeNumber)
+      ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
   cmd->add_flag("--adaptive,!--no-adaptive", options->solver.adaptive,
                 "Adaptive substructuring on radiosity gradients (default on)");
   cmd->add_option("--gradient", options->solver.gradient,
                   "Split when neighbours' luminance differs by more than this x the largest reflected radiosity")
-      ->check(CLI::PositiveNumber)
+      ->check(number_in(0.0, End::kOpen, kInfinity, End::kOpen))
       ->capture_default_str();
   cmd->add_option("--relaxation", options->solver.relaxation,
                   "Overrelaxation of the shooting step in [1, 2): shoot W x unshot (1: plain progressive refinement)")
-      ->check([](const std::string& text) -> std::string {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0';
-        return number && value >= 1.0 && value < 2.0 ? std::string{} : "Value " + text + " not in range [1, 2)";
-      })
+      ->check(number_in(1.0, End::kClosed, 2.0, End::kOpen))
       ->capture_default_str();
   cmd->add_flag("--overshoot", options->solver.overshoot,
                 "Ambient overshooting: also shoot rho x the ambient unshot radiosity (fewer shots; default off)");
   cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
-      ->check(CLI::Range(0, 30));
+      ->check(CLI::Range(1, 60));
   cmd->add_option("--min-area", options->min_area, "Smallest element a split may create, scene units^2")
-      ->check(CLI::PositiveNumber);
+      ->check(positive);
   cmd->add_option("--patch-size", options->patch_size, "Longest patch edge, scene units")
-      ->check(CLI::PositiveNumber);
+      ->check(positive);
   cmd->add_option("--element-size", options->element_size, "Longest initial element edge, scene units")
-      ->check(CLI::PositiveNumber);
+      ->check(positive);
   cmd->add_flag("--balance", options->balance, "Keep edge-neighbours within one level of each other");
   cmd->add_option("--shooter-samples", options->solver.shooter_samples,
                   "Gauss points per direction on the shooting patch (1: its centroid, as the paper)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Worker threads (0: all cores)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
   cmd->add_option("--out", options->out, "Output directory (default out/<scene name>)");
   cmd->add_option("--width", options->width, "Image width in pixels")

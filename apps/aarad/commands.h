@@ -2,7 +2,7 @@
 // and sets the exit code through set_exit_code(); errors propagate as aarad::Error.
 #pragma once
 
-namespace CLI { class App; }
+#include <CLI/CLI.hpp>
 
 namespace aarad::app {
 
@@ -10,6 +10,11 @@ void add_commands(CLI::App& app);
 void add_inspect_command(CLI::App& app);
 void add_formfactors_command(CLI::App& app);
 void add_solve_command(CLI::App& app);
+
+// A CLI11 check: the option's value is a number in the interval from `low` to `high` (either may be infinite),
+// each end included or not. NaN is refused, and the message shows the interval as written in the docs.
+enum class End { kOpen, kClosed };
+CLI::Validator number_in(double low, End low_end, double high, End high_end);
 
 void set_exit_code(int code);
 int exit_code();

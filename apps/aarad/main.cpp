@@ -7,12 +7,27 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 int main(int argc, char** argv) {
   CLI::App app{"aarad: progressive-refinement radiosity with anti-aliased hemicubes"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "aarad 0.1.0");
   aarad::app::add_commands(app);
+  // CLI11 would only say that a subcommand is required: name the unknown one and the known ones.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string known;
+    bool found = false;
+    for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+      found = found || command->check_name(argv[1]);
+      known += (known.empty() ? "" : ", ") + command->get_name();
+    }
+    if (!found) {
+      std::fprintf(stderr, "aarad: error: unknown command '%s'; the commands are %s (aarad --help)\n", argv[1],
+                   known.c_str());
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
