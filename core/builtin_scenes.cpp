@@ -273,6 +273,8 @@ Scene make_cornell_box() {
 
   // Focal length 0.035 and film 0.025 x 0.025: vertical field 2 atan(0.0125 / 0.035).
   scene.camera = Camera{Vec3(278, 273, -800), Vec3(0, 0, 1), Vec3(0, 1, 0), 2.0 * std::atan(0.0125 / 0.035)};
+  // Millimetres: 376 patches and 1 504 initial elements, which keep the AA hemicube's solve short.
+  scene.meshing = MeshingHint{140.0, 70.0, 60.0};
   return finished(std::move(scene));
 }
 
@@ -334,6 +336,9 @@ Scene make_office() {
   }
 
   scene.camera = look_at(Vec3(2.5, 1.6, 0.35), Vec3(2.5, 0.55, 3.2), 55.0 * kPi / 180.0);
+  // Metres. Sizes that mesh the office to about the paper's 5 591 patches and 15 784 elements: 5 588 patches and
+  // 14 127 initial elements, which adaptive substructuring then refines.
+  scene.meshing = MeshingHint{0.185, 0.177, 1e-4};
   return finished(std::move(scene));
 }
 

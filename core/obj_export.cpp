@@ -66,6 +66,11 @@ std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const
         << triple(c.forward.x, c.forward.y, c.forward.z) << " up " << triple(c.up.x, c.up.y, c.up.z)
         << " vertical_fov " << number(c.vertical_fov) << "\n";
   }
+  if (scene.meshing) {
+    const MeshingHint& m = *scene.meshing;
+    out << "# aarad meshing: patch_size " << number(m.patch_size) << " element_size " << number(m.element_size)
+        << " min_area " << number(m.min_area) << "\n";
+  }
   out << "mtllib " << mtl_file_name << "\n";
 
   // Distinct vertices in order of first use, numbered from 1.

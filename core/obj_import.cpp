@@ -100,6 +100,7 @@ struct ObjText {
   std::vector<std::pair<int, std::string>> material_libraries;  // (line, file name) per `mtllib` entry
   std::vector<std::pair<int, std::string>> material_uses;       // (line, name) per `usemtl`
   std::optional<Camera> camera;
+  std::optional<MeshingHint> meshing;
 };
 
 std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t) {
@@ -124,6 +125,18 @@ std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t) {
   if (glm::length(camera.up) < 1e-9) return std::nullopt;
   camera.up = glm::normalize(camera.up);
   return camera;
+}
+
+std::optional<MeshingHint> parse_meshing_comment(const std::vector<std::string>& t) {
+  // # aarad meshing: patch_size P element_size E min_area A
+  if (t.size() != 6 || t[0] != "patch_size" || t[2] != "element_size" || t[4] != "min_area") return std::nullopt;
+  std::array<double, 3> v{};
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const auto n = parse_number(t[2 * i + 1]);
+    if (!n || !std::isfinite(*n) || !(*n > 0.0)) return std::nullopt;
+    v[i] = *n;
+  }
+  return MeshingHint{v[0], v[1], v[2]};
 }
 
 ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std::string>& warnings) {
@@ -171,6 +184,12 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       if (!text.camera)
         warnings.push_back(InputError::format(path, number, "camera comment not understood, ignored; write '# aarad "
                                                             "camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS'"));
+    } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "meshing:") {
+      text.meshing = parse_meshing_comment(std::vector<std::string>(t.begin() + 3, t.end()));
+      if (!text.meshing)
+        warnings.push_back(InputError::format(path, number, "meshing comment not understood, ignored; write '# aarad "
+                                                            "meshing: patch_size P element_size E min_area A' with "
+                                                            "positive numbers"));
     }
   }
   return text;
@@ -470,6 +489,7 @@ Scene import_obj(const std::string& obj_path) {
   if (scene.faces.empty())
     throw InputError(obj_path, 0, "no usable faces; the file needs at least one polygon ('f' line)");
   scene.camera = text.camera;
+  scene.meshing = text.meshing;
   scene.build_surfaces();
   bool emits = false;
   for (const Face& face : scene.faces) emits |= scene.materials[face.material].emits();

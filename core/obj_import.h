@@ -23,6 +23,8 @@
 // An optional comment line restores a camera (write_obj in core/obj_export.h writes it; other programs
 // ignore it):
 //   # aarad camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS
+// and another the meshing sizes the scene was made for (Scene::meshing, used by refine::default_meshing):
+//   # aarad meshing: patch_size P element_size E min_area A
 #pragma once
 
 #include "core/scene.h"

@@ -56,6 +56,13 @@ struct Camera {
   double vertical_fov = 0.6981317007977318;  // 40 degrees
 };
 
+// Meshing sizes chosen by a scene's author, in scene units (refine::default_meshing gives them to the hierarchy).
+struct MeshingHint {
+  double patch_size = 0.0;    // longest patch edge
+  double element_size = 0.0;  // longest initial element edge
+  double min_area = 0.0;      // smallest element a split may create
+};
+
 class Scene {
  public:
   std::string name;  // built-in name or the OBJ path
@@ -64,6 +71,7 @@ class Scene {
   std::vector<Face> faces;
   std::vector<Surface> surfaces;
   std::optional<Camera> camera;
+  std::optional<MeshingHint> meshing;  // the built-ins' sizes, or an OBJ file's "# aarad meshing:" comment
   std::vector<std::string> warnings;  // what import fixed or skipped, each naming file and line
 
   // add_group returns the index of the group named `group_name`, creating it on first use; add_face adds

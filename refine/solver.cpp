@@ -100,17 +100,10 @@ std::vector<SamplePoint> patch_samples(const std::vector<Vec3>& corners, int n) 
 
 mesh::MeshingOptions default_meshing(const Scene& scene) {
   mesh::MeshingOptions options;
-  if (scene.name == "cornell") {
-    // Millimetres. About 230 patches and 700 initial elements (see docs/solver.md).
-    options.patch_size = 140.0;
-    options.element_size = 70.0;
-    options.min_area = 60.0;
-  } else if (scene.name == "office") {
-    // Metres. Sizes chosen so the built-in office meshes to about the paper's 5 591 patches and 15 784
-    // elements: 5 588 patches and 14 127 initial elements, which adaptive substructuring then refines.
-    options.patch_size = 0.185;
-    options.element_size = 0.177;
-    options.min_area = 1e-4;
+  if (scene.meshing) {
+    options.patch_size = scene.meshing->patch_size;
+    options.element_size = scene.meshing->element_size;
+    options.min_area = scene.meshing->min_area;
   }
   return options;
 }

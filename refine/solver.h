@@ -46,9 +46,9 @@ struct SolverOptions {
   mesh::MeshingOptions meshing;  // patch and element sizes, max level, min area, balance
 };
 
-// The meshing defaults aarad uses for a scene: for the built-in office, sizes that give about the paper's
-// 5 591 patches and 15 784 elements; for the Cornell box, sizes that keep the AA hemicube solve short;
-// otherwise the hierarchy's own defaults (zeros).
+// The meshing defaults aarad uses for a scene: the sizes its author chose (Scene::meshing: the built-in
+// Cornell box and office, and OBJ files with a "# aarad meshing:" comment, such as their copies in
+// data/scenes/), otherwise the hierarchy's own defaults (zeros).
 mesh::MeshingOptions default_meshing(const Scene& scene);
 
 struct Progress {

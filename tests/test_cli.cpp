@@ -166,6 +166,18 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   EXPECT_FALSE(fs::exists(dir / "dark"));
 }
 
+TEST(Cli, TheObjCopyOfTheCornellBoxSolvesAsTheBuiltIn) {
+  const fs::path dir = work_dir();
+  const std::string obj = std::string(AARAD_SOURCE_DIR) + "/data/scenes/cornell.obj";
+  const ProgramRun a = aarad("solve cornell --max-shots 40 --quiet --out " + (dir / "builtin").string());
+  const ProgramRun b = aarad("solve " + obj + " --max-shots 40 --quiet --out " + (dir / "copy").string());
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const std::string ply = slurp(dir / "builtin" / "mesh.ply");
+  EXPECT_GT(ply.size(), 10000u);
+  EXPECT_TRUE(ply == slurp(dir / "copy" / "mesh.ply"));
+}
+
 TEST(Cli, FormfactorsFromTheLightAsJson) {
   const ProgramRun r = aarad("formfactors cornell --from light --ff analytic --json");
   ASSERT_EQ(r.code, 0) << r.err;

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -350,6 +351,25 @@ TEST_F(SceneImport, import_camera_comment_is_read_back) {
   EXPECT_EQ(scene.camera->vertical_fov, 0.5);
 }
 
+TEST_F(SceneImport, import_meshing_comment_is_read_back_and_a_bad_one_warns) {
+  const std::string faces = "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
+  const Scene scene = import_obj(write("mesh.obj", "# aarad meshing: patch_size 0.5 element_size 0.25 min_area 1e-3\n" + faces));
+  ASSERT_TRUE(scene.meshing.has_value());
+  EXPECT_EQ(scene.meshing->patch_size, 0.5);
+  EXPECT_EQ(scene.meshing->element_size, 0.25);
+  EXPECT_EQ(scene.meshing->min_area, 1e-3);
+  EXPECT_FALSE(import_obj(write("plain.obj", faces)).meshing.has_value());
+  for (const char* bad : {"# aarad meshing: patch_size 0.5 element_size -1 min_area 1e-3",
+                          "# aarad meshing: patch_size 0.5 element_size 0.25", "# aarad meshing: size 1 2 3 4 5 6"}) {
+    const Scene s = import_obj(write("bad.obj", std::string(bad) + "\n" + faces));
+    EXPECT_FALSE(s.meshing.has_value()) << bad;
+    const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& w) {
+      return w.find("bad.obj:1:") != std::string::npos && w.find("meshing comment not understood") != std::string::npos;
+    });
+    EXPECT_NE(said, s.warnings.end()) << bad;
+  }
+}
+
 TEST(SceneModel, scene_build_surfaces_tolerance_is_relative_to_scene_size) {
   // The same pair of nearly coplanar squares 1e-4 apart, in a scene 1 across and in one 1e3 across:
   // distinct surfaces in the first (1e-4 > 1e-6 x diagonal 2.45), one in the second (1e-4 < 1e-6 x 1000).
@@ -427,6 +447,12 @@ TEST(SceneImportCornell, import_cornell_obj_matches_builtin) {
   ASSERT_TRUE(imported.camera.has_value());
   EXPECT_EQ(imported.camera->eye, builtin.camera->eye);
   EXPECT_EQ(imported.camera->vertical_fov, builtin.camera->vertical_fov);
+  // The meshing sizes come along, so the copy solves as the built-in.
+  ASSERT_TRUE(imported.meshing.has_value());
+  ASSERT_TRUE(builtin.meshing.has_value());
+  EXPECT_EQ(imported.meshing->patch_size, builtin.meshing->patch_size);
+  EXPECT_EQ(imported.meshing->element_size, builtin.meshing->element_size);
+  EXPECT_EQ(imported.meshing->min_area, builtin.meshing->min_area);
 }
 
 TEST(SceneImportCornell, scene_load_resolves_builtin_names_before_paths) {
