@@ -1,0 +1,39 @@
+// Uses the installed library as README.md shows: a Cornell box solve, the public invariant checker, the report
+// and the output files. Exits 0 when everything holds, 1 with a message otherwise.
+#include "core/builtin_scenes.h"
+#include "formfactor/backend.h"
+#include "mesh/invariants.h"
+#include "refine/output.h"
+#include "refine/report.h"
+#include "refine/solver.h"
+
+#include <cstdio>
+#include <filesystem>
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: consumer OUTPUT_DIRECTORY\n");
+    return 2;
+  }
+  using namespace aarad;
+  const Scene scene = load_scene("cornell");
+  refine::SolverOptions options;
+  options.meshing = refine::default_meshing(scene);
+  options.max_shots = 40;
+  refine::Solver solver(scene, options);
+  solver.run();
+  const auto violations = mesh::check_invariants(solver.hierarchy());
+  const refine::OutputResult files = refine::write_solution_files(solver, argv[1]);
+  const nlohmann::json report = refine::make_report(solver, violations);
+  std::printf("%lld shots, %zu elements, unshot %.6f, %zu violations, %zu files, back ends:",
+              static_cast<long long>(solver.shots()), solver.hierarchy().leaf_count(), solver.unshot_fraction(),
+              violations.size(), files.files.size());
+  for (const std::string& name : formfactor::backend_names()) std::printf(" %s", name.c_str());
+  std::printf("\n");
+  const bool ok = solver.shots() == 40 && violations.empty() && files.files.size() == 5 &&
+                  report["elements"].get<std::size_t>() == solver.hierarchy().leaf_count() &&
+                  solver.unshot_fraction() > 0.0 && solver.unshot_fraction() < 1.0 &&
+                  std::filesystem::exists(std::filesystem::path(argv[1]) / "mesh.ply");
+  if (!ok) std::fprintf(stderr, "consumer: the solve through the installed package is not as expected\n");
+  return ok ? 0 : 1;
+}
