@@ -81,7 +81,7 @@ bool vertex_reference(const std::string& token) {
     ++at;
     if (!whole_number(part == 0)) return false;  // only the texture index may be empty (v//vn)
   }
-  return at == token.size();
+  return at == token.size() && token.back() != '/';  // "1/" leaves the texture index out without a normal
 }
 
 std::string number_text(double v) {
@@ -133,7 +133,7 @@ std::optional<MeshingHint> parse_meshing_comment(const std::vector<std::string>&
   std::array<double, 3> v{};
   for (std::size_t i = 0; i < v.size(); ++i) {
     const auto n = parse_number(t[2 * i + 1]);
-    if (!n || !std::isfinite(*n) || !(*n > 0.0)) return std::nullopt;
+    if (!n || !std::isfinite(*n) || !(*n >= 0.0)) return std::nullopt;  // 0: the hierarchy's default
     v[i] = *n;
   }
   return MeshingHint{v[0], v[1], v[2]};
@@ -189,7 +189,7 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       if (!text.meshing)
         warnings.push_back(InputError::format(path, number, "meshing comment not understood, ignored; write '# aarad "
                                                             "meshing: patch_size P element_size E min_area A' with "
-                                                            "positive numbers"));
+                                                            "numbers >= 0 (0: from the scene's size)"));
     }
   }
   return text;

@@ -56,7 +56,8 @@ struct Camera {
   double vertical_fov = 0.6981317007977318;  // 40 degrees
 };
 
-// Meshing sizes chosen by a scene's author, in scene units (refine::default_meshing gives them to the hierarchy).
+// Meshing sizes chosen by a scene's author, in scene units (refine::default_meshing gives them to the hierarchy;
+// 0 leaves a size to the hierarchy's default, relative to the scene's size).
 struct MeshingHint {
   double patch_size = 0.0;    // longest patch edge
   double element_size = 0.0;  // longest initial element edge

@@ -28,7 +28,8 @@ struct MeshingOptions {
   int max_level = 8;          // deepest node level; patches are level 0
   double min_area = 0.0;      // smallest element a split may create; 0 picks a default from the scene's size
   bool balance = false;       // keep edge-neighbours within one level of each other
-  // Refuse sizes that would make more initial patches or elements than this (each costs a few kilobytes).
+  // Refuse sizes that would make more initial patches or elements than this, counted per surface before
+  // meshing it (each element costs about a kilobyte through a solve).
   double max_initial_elements = 2e6;
 };
 

@@ -49,7 +49,27 @@ Frame frame_of(const Plane& plane, const Vec3& origin) {
   return {origin, u, glm::cross(n, u)};
 }
 
-int divisions(double length, double size) { return std::max(1, static_cast<int>(std::ceil(length / size - 1e-9))); }
+// Pieces of at most `size` along `length`, as a double (it is checked against the budget before it becomes an int).
+double divisions(double length, double size) { return std::max(1.0, std::ceil(length / size - 1e-9)); }
+
+// The count limit of one surface's meshing: what MeshingOptions::max_initial_elements leaves after the surfaces
+// meshed before it. Counts are checked, in doubles, before anything is allocated.
+struct Budget {
+  const Scene& scene;
+  const Surface& surface;
+  double remaining = 0.0;
+  double limit = 0.0;  // of the whole scene
+
+  void check(double count, const char* items, const char* option, double size) const {
+    if (count <= remaining) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "meshing: with %s %g the surface of group '%s' makes %.3g initial %s, and the scene more than "
+                  "the limit of %.3g (MeshingOptions::max_initial_elements); choose a larger %s",
+                  option, size, scene.groups[surface.group].name.c_str(), count, items, limit, option);
+    throw Error(text);
+  }
+};
 
 bool strictly_convex_quad(std::span<const Vec3> polygon, const Frame& frame) {
   if (polygon.size() != 4) return false;
@@ -62,11 +82,16 @@ bool strictly_convex_quad(std::span<const Vec3> polygon, const Frame& frame) {
 
 // One convex quadrilateral: a global bilinear grid of (nx ex) x (ny ey) points; patch (i, j) covers
 // ex x ey grid cells, each cell an element.
-SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, double element_size) {
+SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, double element_size,
+                                const Budget& budget) {
   const double lu = std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3]));
   const double lv = std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1]));
-  const int nx = divisions(lu, patch_size), ny = divisions(lv, patch_size);
-  const int ex = divisions(lu / nx, element_size), ey = divisions(lv / ny, element_size);
+  const double patches_u = divisions(lu, patch_size), patches_v = divisions(lv, patch_size);
+  budget.check(patches_u * patches_v, "patches", "patch size", patch_size);
+  const double elements_u = divisions(lu / patches_u, element_size), elements_v = divisions(lv / patches_v, element_size);
+  budget.check(patches_u * patches_v * elements_u * elements_v, "elements", "element size", element_size);
+  const int nx = static_cast<int>(patches_u), ny = static_cast<int>(patches_v);
+  const int ex = static_cast<int>(elements_u), ey = static_cast<int>(elements_v);
   const int gx = nx * ex, gy = ny * ey;
   SurfaceMeshing out;
   out.points.reserve(static_cast<std::size_t>(gx + 1) * (gy + 1));
@@ -104,13 +129,15 @@ bool inside(const std::vector<Vec2>& polygon, const Vec2& p) {
 // Divides every triangle patch into m x m similar triangles, m the same over the surface so patches sharing
 // an edge conform. Points on a patch edge are computed from the edge's lower-index end, so both patches get
 // bit-identical points.
-void divide_triangle_patches(SurfaceMeshing& out, double element_size) {
+void divide_triangle_patches(SurfaceMeshing& out, double element_size, const Budget& budget) {
   double longest = 0.0;
   for (const CornerIndices& patch : out.patches)
     for (int k = 0; k < 3; ++k)
       longest = std::max(longest, glm::length(out.points[static_cast<std::size_t>(patch[(k + 1) % 3])] -
                                               out.points[static_cast<std::size_t>(patch[k])]));
-  const int m = divisions(longest, element_size);
+  const double pieces = divisions(longest, element_size);
+  budget.check(static_cast<double>(out.patches.size()) * pieces * pieces, "elements", "element size", element_size);
+  const int m = static_cast<int>(pieces);
 
   // Points along patch edges, keyed by the edge's (lower, higher) point index.
   std::map<std::pair<int, int>, std::vector<int>> edge_points;
@@ -157,10 +184,12 @@ void divide_triangle_patches(SurfaceMeshing& out, double element_size) {
 }
 
 // One triangle: an n x n grid of similar triangle patches (no edge longer than patch_size), then elements.
-SurfaceMeshing mesh_triangle(std::span<const Vec3> c, double patch_size, double element_size) {
+SurfaceMeshing mesh_triangle(std::span<const Vec3> c, double patch_size, double element_size, const Budget& budget) {
   const double longest =
       std::max({glm::length(c[1] - c[0]), glm::length(c[2] - c[1]), glm::length(c[0] - c[2])});
-  const int n = divisions(longest, patch_size);
+  const double rows = divisions(longest, patch_size);
+  budget.check(rows * rows, "patches", "patch size", patch_size);
+  const int n = static_cast<int>(rows);
   SurfaceMeshing out;
   std::vector<int> row_start;  // grid point (i, j), i + j <= n, is row_start[j] + i
   for (int j = 0; j <= n; ++j) {
@@ -176,13 +205,17 @@ SurfaceMeshing mesh_triangle(std::span<const Vec3> c, double patch_size, double 
       out.patches.push_back({at(i, j), at(i + 1, j), at(i, j + 1), -1});
       if (i + j + 1 < n) out.patches.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), -1});
     }
-  divide_triangle_patches(out, element_size);
+  divide_triangle_patches(out, element_size, budget);
   return out;
 }
 
 // Any other surface: constrained Delaunay mesh of the union of its faces (shared edges and T-junctions
 // between its faces become shared triangulation vertices, so the result conforms), then elements.
-SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double patch_size, double element_size) {
+SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double patch_size, double element_size,
+                            const Budget& budget) {
+  // The mesher makes triangles with edges up to patch_size, of area 0.433 patch_size^2 at most (equilateral):
+  // refuse a size that cannot stay within the budget before refining.
+  budget.check(surface.area / (0.433 * patch_size * patch_size), "patches", "patch size", patch_size);
   const Frame frame = frame_of(surface.plane, scene.faces[surface.faces.front()].vertices.front());
   std::vector<std::vector<Vec2>> polygons;
   std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
@@ -229,7 +262,8 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   }
   if (out.patches.empty())
     throw Error("initial meshing: surface of group '" + scene.groups[surface.group].name + "' has no area to mesh");
-  divide_triangle_patches(out, element_size);
+  budget.check(static_cast<double>(out.patches.size()), "patches", "patch size", patch_size);
+  divide_triangle_patches(out, element_size, budget);
   return out;
 }
 
@@ -247,34 +281,21 @@ MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options
   if (resolved.patch_size == 0.0) resolved.patch_size = d / 8.0;
   if (resolved.element_size == 0.0) resolved.element_size = resolved.patch_size / 2.0;
   if (resolved.min_area == 0.0) resolved.min_area = 1e-7 * d * d;
-  // Refuse sizes that would exhaust memory (or overflow the grid counts) before meshing starts. A triangle with
-  // edges of length s has area 0.433 s^2 and a square s^2, so area / (0.4 s^2) is about the count or more.
-  double area = 0.0;
-  for (const Surface& surface : scene.surfaces) area += surface.area;
-  const auto refuse_if_too_many = [&](const char* article, const char* option, const char* items, double size) {
-    const double estimate = area / (0.4 * size * size);
-    if (!(estimate <= options.max_initial_elements)) {
-      char text[256];
-      std::snprintf(text, sizeof text,
-                    "meshing: %s %s of %g would make about %.3g initial %s (the limit is %.3g); choose a larger %s",
-                    article, option, size, estimate, items, options.max_initial_elements, option);
-      throw Error(text);
-    }
-  };
-  refuse_if_too_many("a", "patch size", "patches", resolved.patch_size);
-  refuse_if_too_many("an", "element size", "elements", std::min(resolved.element_size, resolved.patch_size));
   return resolved;
 }
 
-SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double patch_size, double element_size) {
+SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double patch_size, double element_size,
+                            double max_elements, double scene_limit) {
   const Surface& surface = scene.surfaces.at(surface_id);
+  const Budget budget{scene, surface, max_elements, scene_limit < 0.0 ? max_elements : scene_limit};
   if (surface.faces.size() == 1) {
     const std::vector<Vec3>& polygon = scene.faces[surface.faces.front()].vertices;
     if (strictly_convex_quad(polygon, frame_of(surface.plane, polygon.front())))
-      return mesh_convex_quad(polygon, patch_size, element_size);
-    if (polygon.size() == 3 && aarad::area(polygon) > 0.0) return mesh_triangle(polygon, patch_size, element_size);
+      return mesh_convex_quad(polygon, patch_size, element_size, budget);
+    if (polygon.size() == 3 && aarad::area(polygon) > 0.0)
+      return mesh_triangle(polygon, patch_size, element_size, budget);
   }
-  return mesh_general(scene, surface, patch_size, element_size);
+  return mesh_general(scene, surface, patch_size, element_size, budget);
 }
 
 }  // namespace aarad::mesh

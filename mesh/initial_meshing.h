@@ -12,8 +12,8 @@
 namespace aarad::mesh {
 
 // Defaults relative to the scene diagonal d: patch_size = d / 8, element_size = patch_size / 2,
-// min_area = 1e-7 d^2. Fields that are not zero are kept. Throws aarad::Error for negative or non-finite sizes,
-// a max_level outside [1, 60], or sizes that would make more than max_initial_elements patches or elements.
+// min_area = 1e-7 d^2. Fields that are not zero are kept. Throws aarad::Error for negative or non-finite sizes
+// or a max_level outside [1, 60].
 MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options);
 
 // A polygon of 3 or 4 point indices, counter-clockwise seen from the surface's front; [3] = -1 for a triangle.
@@ -31,6 +31,9 @@ struct SurfaceMeshing {
 // Any other surface (triangles, concave faces, several faces, holes) is the union of its faces, triangulated
 // by a constrained Delaunay mesher (CGAL) into triangle patches with edges no longer than patch_size, each
 // patch divided into m x m similar triangles (m the same over the surface, so patches conform).
-SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size);
+// Throws aarad::Error naming the surface's group, before allocating, when it would make more than max_elements
+// patches or elements (scene_limit, when given, is the scene's whole limit, for the message).
+SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size,
+                            double max_elements = 2e6, double scene_limit = -1.0);
 
 }  // namespace aarad::mesh

@@ -335,9 +335,9 @@ class Checker {
         report("children-tile-parent", n, "children of node ", n, " cover ", sum, " of its area ", m_.area[n],
                " (relative ", (sum - m_.area[n]) / m_.area[n], ")");
       // Pairs of children, swept by the left end of their x ranges (a patch can have thousands of initial
-      // elements). A pair whose bounding boxes overlap by less than half the tolerance along x or y is skipped:
+      // elements). A pair that a shift of less than half the tolerance along x or y would pull apart is skipped:
       // the overlap test measures penetration along edge normals, and for convex polygons the least of those is
-      // at most the penetration along any axis, so it would call the pair separated too.
+      // the shortest shift that separates them, in any direction, so it would call the pair separated too.
       const double slack = 0.5 * length_tolerance_;
       boxes_.clear();
       for (const std::vector<Vec2>& child : children_2d) {
@@ -358,8 +358,7 @@ class Checker {
         for (std::size_t b = a + 1; b < order_.size(); ++b) {
           const std::size_t j = order_[b];
           if (boxes_[i].high.x - boxes_[j].low.x < slack) break;  // nor any later child
-          if (std::min(boxes_[i].high.y, boxes_[j].high.y) - std::max(boxes_[i].low.y, boxes_[j].low.y) < slack)
-            continue;
+          if (std::min(boxes_[i].high.y - boxes_[j].low.y, boxes_[j].high.y - boxes_[i].low.y) < slack) continue;
           if (overlap(children_2d[i], children_2d[j])) {
             const std::size_t first = std::min(i, j), second = std::max(i, j);
             report("children-tile-parent", children[first], "children ", children[first], " and ", children[second],

@@ -6,7 +6,9 @@
 #include "mesh/export_ply.h"
 #include "refine/render.h"
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <system_error>
@@ -26,18 +28,17 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
   return ToneMap::from_percentile(values, areas, 0.99);
 }
 
-void prepare_output_directory(const std::filesystem::path& directory) {
+void check_output_directory(const std::filesystem::path& directory) {
   namespace fs = std::filesystem;
   std::error_code error;
-  fs::create_directories(directory, error);
+  fs::path existing = fs::absolute(directory, error);
   if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
-  if (!fs::is_directory(directory, error)) throw Error(directory.string() + " is not a directory");
-  const fs::path probe = directory / (".aarad-probe-" + std::to_string(::getpid()));
-  {
-    std::ofstream out(probe, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error("cannot write files in " + directory.string());
-  }
-  fs::remove(probe, error);
+  while (!fs::exists(existing, error) && existing.has_parent_path() && existing != existing.parent_path())
+    existing = existing.parent_path();
+  if (!fs::is_directory(existing, error))
+    throw Error("cannot create directory " + directory.string() + ": " + existing.string() + " is not a directory");
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    throw Error("cannot write files in " + existing.string() + ": " + std::strerror(errno));
 }
 
 OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,

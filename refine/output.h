@@ -28,9 +28,10 @@ struct OutputResult {
 // max(r, g, b) to 1 (docs/solver.md).
 ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed);
 
-// Creates `directory` when missing and checks that files can be created in it (by creating and removing a probe
-// file), so that a solve can refuse an unusable output directory before it starts. Throws aarad::Error.
-void prepare_output_directory(const std::filesystem::path& directory);
+// Checks, without creating anything, that write_solution_files could create `directory` and write into it: the
+// directory, or the nearest ancestor that exists, is a directory this process may write into. A solve calls it
+// before it starts, so that it does not end in an error about its output. Throws aarad::Error.
+void check_output_directory(const std::filesystem::path& directory);
 
 // Writes mesh.ply, flat.png, smooth.png, mesh.png and radiosity.exr into `directory` (created when missing),
 // from the scene's camera or, without one, Scene::fitted_camera. Throws aarad::Error naming the file on failure.

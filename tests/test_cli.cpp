@@ -123,8 +123,8 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
   const std::pair<const char*, const char*> cases[] = {
       {"solve --gradient 0", "must be a finite number > 0"},     {"solve --gradient -1", "must be a finite number > 0"},
       {"solve --gradient nan", "must be a finite number > 0"},   {"solve --converge nan", "must be a number in [0, 1]"},
-      {"solve --converge 1.5", "must be a number in [0, 1]"},    {"solve --patch-size inf", "must be a finite number > 0"},
-      {"solve --element-size -2", "must be a finite number > 0"}, {"solve --min-area 0", "must be a finite number > 0"},
+      {"solve --converge 1.5", "must be a number in [0, 1]"},    {"solve --patch-size inf", "must be a finite number >= 0"},
+      {"solve --element-size -2", "must be a finite number >= 0"}, {"solve --min-area nan", "must be a finite number >= 0"},
       {"solve --threads -1", "must be a finite number >= 0"},    {"solve --max-shots -3", "must be a finite number >= 0"},
       {"solve --relaxation nan", "must be a number in [1, 2)"},
   };
@@ -148,7 +148,7 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   // Far more initial elements than memory holds: refused at once, nothing written.
   ProgramRun r = aarad("solve cornell --element-size 0.01 --out " + (dir / "fine").string());
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("element size of 0.01 would make about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("with element size 0.01 the surface of group"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "fine"));
   // An output path below a regular file.
   const fs::path file = write_file("a_file", "x");

@@ -48,27 +48,33 @@ TEST(Hierarchy, DefaultsAreRelativeToTheSceneDiagonal) {
 }
 
 TEST(Hierarchy, SizesThatWouldExhaustMemoryOrAreNotFiniteAreRefused) {
-  const Scene scene = test::square_scene();  // area 1: about 1 / (0.4 s^2) elements of size s
-  const auto message = [&](const MeshingOptions& o) -> std::string {
+  const auto message = [](const Scene& scene, const MeshingOptions& o) -> std::string {
     try {
-      resolve_options(scene, o);
+      const Hierarchy h(scene, o);
     } catch (const Error& e) {
       return e.what();
     }
     return {};
   };
-  MeshingOptions o = sizes(0.5, 1e-4);  // about 2.5e8 elements
-  EXPECT_NE(message(o).find("element size of 0.0001 would make about 2.5e+08 initial elements"), std::string::npos)
-      << message(o);
-  o = sizes(1e-9, 1e-9);  // would overflow the grid counts
-  EXPECT_NE(message(o).find("patch size of 1e-09"), std::string::npos) << message(o);
-  o = sizes(0.5, 1e-3);  // 2.5e6 elements: over the default limit, allowed under a larger one
-  EXPECT_NE(message(o).find("the limit is 2e+06"), std::string::npos) << message(o);
+  const Scene square = test::square_scene();  // one unit square: a grid of (1 / size)^2 quads
+  MeshingOptions o = sizes(0.5, 1e-4);
+  EXPECT_NE(message(square, o).find("with element size 0.0001 the surface of group 'square' makes 1e+08 initial "
+                                    "elements, and the scene more than the limit of 2e+06"),
+            std::string::npos)
+      << message(square, o);
+  o = sizes(1e-9, 1e-9);  // counts far beyond an int
+  EXPECT_NE(message(square, o).find("with patch size 1e-09"), std::string::npos) << message(square, o);
+  o = sizes(0.5, 1.0 / 1500);  // 2.25e6 elements: over the default limit, allowed under a larger one
+  EXPECT_NE(message(square, o).find("2.25e+06 initial elements"), std::string::npos) << message(square, o);
   o.max_initial_elements = 3e6;
-  EXPECT_EQ(message(o), "");
+  EXPECT_EQ(message(square, o), "");
+  // A sliver: its patches come from its longest edge, not its area (3000 x 3000 patches of size 1).
+  const Scene sliver = test::polygon_scene({{0, 0}, {2999.5, 0}, {0, 0.01}}, "sliver");
+  EXPECT_NE(message(sliver, sizes(1.0, 1.0)).find("makes 9e+06 initial patches"), std::string::npos)
+      << message(sliver, sizes(1.0, 1.0));
   for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -1.0}) {
-    EXPECT_NE(message(sizes(bad, 0.1)).find("finite and >= 0"), std::string::npos);
-    EXPECT_NE(message(sizes(0.5, bad)).find("finite and >= 0"), std::string::npos);
+    EXPECT_NE(message(square, sizes(bad, 0.1)).find("finite and >= 0"), std::string::npos);
+    EXPECT_NE(message(square, sizes(0.5, bad)).find("finite and >= 0"), std::string::npos);
   }
 }
 

@@ -144,7 +144,7 @@ TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
 
 TEST_F(SceneImport, import_face_with_a_token_that_is_not_a_vertex_reference_is_error_with_line) {
   const std::string vertices = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
-  for (const char* face : {"f 1 2 x 4", "f 1 2 3 4x", "f 1 2 3 0", "f 1/ 2 3 4/1/", "f 1//2/ 2 3", "f 1 2 3 4.5"}) {
+  for (const char* face : {"f 1 2 x 4", "f 1 2 3 4x", "f 1 2 3 0", "f 1/ 2 3 4/1/", "f 1//2/ 2 3", "f 1 2 3 4.5", "f 1/ 2 3"}) {
     const InputError e = import_error(write("token.obj", vertices + "# faces\n" + face + "\n"));
     EXPECT_EQ(e.line(), 6) << face;
     EXPECT_NE(e.message().find("not a vertex reference"), std::string::npos) << face << ": " << e.message();

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -56,7 +57,9 @@ void run_formfactors(const FormFactorsOptions& options) {
     for (const Group& g : scene.groups) known += (known.empty() ? "" : ", ") + g.name;
     std::string message = "scene '" + scene.name + "' has no group '" + options.from + "'; its groups are: " + known;
     // A group whose faces were all skipped on import (zero area, too few vertices) is not in the scene.
-    if (!scene.warnings.empty()) message += " (faces skipped on import belong to no group: see the warnings above)";
+    const bool skipped = std::any_of(scene.warnings.begin(), scene.warnings.end(),
+                                     [](const std::string& w) { return w.find("skipped") != std::string::npos; });
+    if (skipped) message += " (faces skipped on import belong to no group: see the warnings above)";
     throw Error(message);
   }
   const formfactor::Shooter shooter = shooter_of_group(scene, *from);

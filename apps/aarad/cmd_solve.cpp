@@ -139,6 +139,7 @@ void run_solve(SolveCommandOptions options) {
   if (options.max_level) solver_options.meshing.max_level = *options.max_level;
   solver_options.meshing.balance = options.balance;
   const std::filesystem::path out = options.out.empty() ? default_out_directory(scene) : options.out;
+  refine::check_output_directory(out);  // now, not after the solve
 
   refine::Solver solver(scene, solver_options);
   if (!(solver.emitted_flux().sum() > 0.0)) {
@@ -146,8 +147,6 @@ void run_solve(SolveCommandOptions options) {
                 "would be black" +
                 (scene.warnings.empty() || options.quiet ? std::string() : " (see the warnings above)"));
   }
-  // Refuse an output directory that cannot be written now, not after the solve.
-  refine::prepare_output_directory(out);
   const bool show_progress = !options.quiet;
   if (show_progress) {
     std::fprintf(stderr, "aarad: %s: %zu patches, %zu elements; %s at resolution %d\n", scene.name.c_str(),
@@ -201,7 +200,7 @@ void run_solve(SolveCommandOptions options) {
 void add_solve_command(CLI::App& app) {
   auto options = std::make_shared<SolveCommandOptions>();
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
-  const CLI::Validator positive = number_in(0.0, End::kOpen, kInfinity, End::kOpen);
+  const CLI::Validator size = number_in(0.0, End::kClosed, kInfinity, End::kOpen);  // 0: from the scene's size
   CLI::App* cmd = app.add_subcommand(
       "solve", "Progressive-refinement radiosity with adaptive substructuring; writes mesh, images and report");
   cmd->add_option("scene", options->scene, "Built-in scene (cornell, office, furnace) or OBJ file")
@@ -231,12 +230,14 @@ void add_solve_command(CLI::App& app) {
                 "Ambient overshooting: also shoot rho x the ambient unshot radiosity (fewer shots; default off)");
   cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
       ->check(CLI::Range(1, 60));
-  cmd->add_option("--min-area", options->min_area, "Smallest element a split may create, scene units^2")
-      ->check(positive);
-  cmd->add_option("--patch-size", options->patch_size, "Longest patch edge, scene units")
-      ->check(positive);
-  cmd->add_option("--element-size", options->element_size, "Longest initial element edge, scene units")
-      ->check(positive);
+  cmd->add_option("--min-area", options->min_area,
+                  "Smallest element a split may create, scene units^2 (0: 1e-7 x the squared scene diagonal)")
+      ->check(size);
+  cmd->add_option("--patch-size", options->patch_size, "Longest patch edge, scene units (0: the scene diagonal / 8)")
+      ->check(size);
+  cmd->add_option("--element-size", options->element_size,
+                  "Longest initial element edge, scene units (0: half the patch size)")
+      ->check(size);
   cmd->add_flag("--balance", options->balance, "Keep edge-neighbours within one level of each other");
   cmd->add_option("--shooter-samples", options->solver.shooter_samples,
                   "Gauss points per direction on the shooting patch (1: its centroid, as the paper)")
