@@ -15,7 +15,6 @@ Sign to_sign(CGAL::Sign s) { return static_cast<Sign>(static_cast<int>(s)); }
 Kernel::Point_2 point(const Vec2& v) { return {v.x, v.y}; }
 Kernel::Point_3 point(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-
 // Sign of a . s + d with a floating-point filter: the error bound of the double evaluation follows
 // Shewchuk's style estimate; when the result is inside it, fall back to exact rationals.
 Sign exact_linear_sign(const Vec3& a, double d, const Vec3& s) {

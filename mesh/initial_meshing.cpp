@@ -88,7 +88,8 @@ SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, doub
   const double lv = std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1]));
   const double patches_u = divisions(lu, patch_size), patches_v = divisions(lv, patch_size);
   budget.check(patches_u * patches_v, "patches", "patch size", patch_size);
-  const double elements_u = divisions(lu / patches_u, element_size), elements_v = divisions(lv / patches_v, element_size);
+  const double elements_u = divisions(lu / patches_u, element_size);
+  const double elements_v = divisions(lv / patches_v, element_size);
   budget.check(patches_u * patches_v * elements_u * elements_v, "elements", "element size", element_size);
   const int nx = static_cast<int>(patches_u), ny = static_cast<int>(patches_v);
   const int ex = static_cast<int>(elements_u), ey = static_cast<int>(elements_v);
@@ -287,7 +288,7 @@ MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double patch_size, double element_size,
                             double max_elements, double scene_limit) {
   const Surface& surface = scene.surfaces.at(surface_id);
-  const Budget budget{scene, surface, max_elements, scene_limit < 0.0 ? max_elements : scene_limit};
+  const Budget budget{scene, surface, max_elements, scene_limit};
   if (surface.faces.size() == 1) {
     const std::vector<Vec3>& polygon = scene.faces[surface.faces.front()].vertices;
     if (strictly_convex_quad(polygon, frame_of(surface.plane, polygon.front())))

@@ -32,8 +32,9 @@ struct SurfaceMeshing {
 // by a constrained Delaunay mesher (CGAL) into triangle patches with edges no longer than patch_size, each
 // patch divided into m x m similar triangles (m the same over the surface, so patches conform).
 // Throws aarad::Error naming the surface's group, before allocating, when it would make more than max_elements
-// patches or elements (scene_limit, when given, is the scene's whole limit, for the message).
+// patches or elements: what the scene's limit (MeshingOptions::max_initial_elements, named in the message) leaves
+// after the surfaces meshed before it.
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size,
-                            double max_elements = 2e6, double scene_limit = -1.0);
+                            double max_elements, double scene_limit);
 
 }  // namespace aarad::mesh

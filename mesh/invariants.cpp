@@ -302,6 +302,7 @@ class Checker {
   void check_tiling() {
     std::vector<Vec3> parent_corners, child_corners;
     std::vector<std::vector<Vec2>> children_2d;
+    std::vector<NodeId> child_nodes;  // the node of each entry of children_2d
     std::vector<Vec2> parent_2d;
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
       h_.corners(n, parent_corners);
@@ -315,6 +316,7 @@ class Checker {
       project_to_2d(parent_corners, plane.normal, parent_2d);
       double sum = 0.0;
       children_2d.clear();
+      child_nodes.clear();
       for (NodeId c : children) {
         if (!valid_node(c)) continue;
         h_.corners(c, child_corners);
@@ -325,6 +327,7 @@ class Checker {
           if (std::abs(plane.signed_distance(p)) > length_tolerance_)
             report("children-tile-parent", c, "a corner of child ", c, " lies ", plane.signed_distance(p),
                    " off the plane of node ", n);
+        child_nodes.push_back(c);
         children_2d.emplace_back(child_corners.size());
         project_to_2d(child_corners, plane.normal, children_2d.back());
         for (const Vec2& p : children_2d.back())
@@ -334,36 +337,41 @@ class Checker {
       if (std::abs(sum - m_.area[n]) > kAreaTolerance * m_.area[n])
         report("children-tile-parent", n, "children of node ", n, " cover ", sum, " of its area ", m_.area[n],
                " (relative ", (sum - m_.area[n]) / m_.area[n], ")");
-      // Pairs of children, swept by the left end of their x ranges (a patch can have thousands of initial
-      // elements). A pair that a shift of less than half the tolerance along x or y would pull apart is skipped:
-      // the overlap test measures penetration along edge normals, and for convex polygons the least of those is
-      // the shortest shift that separates them, in any direction, so it would call the pair separated too.
-      const double slack = 0.5 * length_tolerance_;
-      boxes_.clear();
-      for (const std::vector<Vec2>& child : children_2d) {
-        Box box{child.front(), child.front()};
-        for (const Vec2& p : child) {
-          box.low = glm::min(box.low, p);
-          box.high = glm::max(box.high, p);
-        }
-        boxes_.push_back(box);
+      check_children_disjoint(n, child_nodes, children_2d);
+    }
+  }
+
+  // No two of a node's children overlap. Pairs are swept by the left ends of their x ranges (a patch can have
+  // thousands of initial elements). A pair that a shift of less than half the tolerance along x or y would pull
+  // apart is skipped: the overlap test measures penetration along edge normals, and for convex polygons the least
+  // of those is the shortest shift that separates them, in any direction, so it would call the pair separated too.
+  void check_children_disjoint(NodeId parent, const std::vector<NodeId>& nodes,
+                               const std::vector<std::vector<Vec2>>& polygons) {
+    const double slack = 0.5 * length_tolerance_;
+    boxes_.clear();
+    for (const std::vector<Vec2>& polygon : polygons) {
+      Box box{polygon.front(), polygon.front()};
+      for (const Vec2& p : polygon) {
+        box.low = glm::min(box.low, p);
+        box.high = glm::max(box.high, p);
       }
-      order_.resize(children_2d.size());
-      for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
-      std::sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) {
-        return boxes_[a].low.x < boxes_[b].low.x || (boxes_[a].low.x == boxes_[b].low.x && a < b);
-      });
-      for (std::size_t a = 0; a < order_.size(); ++a) {
-        const std::size_t i = order_[a];
-        for (std::size_t b = a + 1; b < order_.size(); ++b) {
-          const std::size_t j = order_[b];
-          if (boxes_[i].high.x - boxes_[j].low.x < slack) break;  // nor any later child
-          if (std::min(boxes_[i].high.y - boxes_[j].low.y, boxes_[j].high.y - boxes_[i].low.y) < slack) continue;
-          if (overlap(children_2d[i], children_2d[j])) {
-            const std::size_t first = std::min(i, j), second = std::max(i, j);
-            report("children-tile-parent", children[first], "children ", children[first], " and ", children[second],
-                   " of node ", n, " overlap");
-          }
+      boxes_.push_back(box);
+    }
+    order_.resize(polygons.size());
+    for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+    std::sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) {
+      return boxes_[a].low.x < boxes_[b].low.x || (boxes_[a].low.x == boxes_[b].low.x && a < b);
+    });
+    for (std::size_t a = 0; a < order_.size(); ++a) {
+      const Box& first = boxes_[order_[a]];
+      for (std::size_t b = a + 1; b < order_.size(); ++b) {
+        const Box& second = boxes_[order_[b]];
+        if (first.high.x - second.low.x < slack) break;  // nor any later child
+        if (std::min(first.high.y - second.low.y, second.high.y - first.low.y) < slack) continue;
+        if (overlap(polygons[order_[a]], polygons[order_[b]])) {
+          const NodeId x = nodes[order_[a]], y = nodes[order_[b]];
+          report("children-tile-parent", std::min(x, y), "children ", std::min(x, y), " and ", std::max(x, y),
+                 " of node ", parent, " overlap");
         }
       }
     }
