@@ -73,11 +73,21 @@ TEST(HierarchyDisplay, HangingVertexTakesTheInterpolationAlongItsHostEdge) {
   h.radiosity(left) = Rgb(1.0);
   for (int k = 0; k < 4; ++k) h.radiosity(r.children[static_cast<std::size_t>(k)]) = Rgb(3.0 + 2.0 * k);
   const DisplayMesh d = build_display_mesh(h, values_of(h));
-  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1, 0, 0})].r, 1.4);
-  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1, 1, 0})].r, 2.6);
-  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1, 0.5, 0})].r, 2.0);
-  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {0, 0, 0})].r, 1.0);
-  EXPECT_DOUBLE_EQ(d.vertex_values[index_of(d, {1.5, 0.5, 0})].r, 6.0);  // R's centre: mean of its four children
+  // Every vertex looked up exists (index_of returns positions.size() for a missing point).
+  const std::size_t n = d.positions.size();
+  ASSERT_EQ(d.vertex_values.size(), n);
+  const std::size_t c10 = index_of(d, {1, 0, 0}), c11 = index_of(d, {1, 1, 0}), hanging = index_of(d, {1, 0.5, 0}),
+                    origin = index_of(d, {0, 0, 0}), centre = index_of(d, {1.5, 0.5, 0});
+  ASSERT_LT(c10, n);
+  ASSERT_LT(c11, n);
+  ASSERT_LT(hanging, n);
+  ASSERT_LT(origin, n);
+  ASSERT_LT(centre, n);
+  EXPECT_DOUBLE_EQ(d.vertex_values[c10].r, 1.4);
+  EXPECT_DOUBLE_EQ(d.vertex_values[c11].r, 2.6);
+  EXPECT_DOUBLE_EQ(d.vertex_values[hanging].r, 2.0);
+  EXPECT_DOUBLE_EQ(d.vertex_values[origin].r, 1.0);
+  EXPECT_DOUBLE_EQ(d.vertex_values[centre].r, 6.0);  // R's centre: mean of its four children
   // L has five loop vertices: a fan of five triangles from its centre; R's children two each.
   EXPECT_EQ(d.triangles.size(), 5u + 4u * 2u);
   expect_crack_free(h, d);
@@ -98,6 +108,9 @@ TEST(HierarchyDisplay, NestedHangingVerticesInterpolateRecursively) {
   for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(unit(rng), unit(rng), unit(rng));
   (void)left;
   const DisplayMesh d = build_display_mesh(h, values_of(h));
+  ASSERT_LT(index_of(d, {1, 0, 0}), d.positions.size());
+  ASSERT_LT(index_of(d, {1, 1, 0}), d.positions.size());
+  ASSERT_EQ(d.vertex_values.size(), d.positions.size());
   const Rgb lo = d.vertex_values[index_of(d, {1, 0, 0})], hi = d.vertex_values[index_of(d, {1, 1, 0})];
   for (double y : {0.5, 0.75, 0.875}) {
     ASSERT_LT(index_of(d, {1, y, 0}), d.positions.size());

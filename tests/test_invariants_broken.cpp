@@ -1,5 +1,6 @@
 // Every invariant broken on purpose (through Hierarchy::Impl, mesh/leaf_mesh.h) and reported by
 // check_invariants under its name; the intact structure reports nothing.
+#include "core/polygon.h"
 #include "mesh/hierarchy.h"
 #include "mesh/invariants.h"
 #include "mesh/leaf_mesh.h"
@@ -7,7 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <string>
+#include <vector>
 
 namespace aarad::mesh {
 namespace {
@@ -38,11 +42,85 @@ Hierarchy refined(bool balance = false) {
 NodeId left_leaf(const Hierarchy& h) { return h.leaves()[0]; }
 NodeId right_node(const Hierarchy& h) { return h.children(h.patches()[0])[1]; }
 
-TEST(InvariantBroken, ChildAreasNoLongerSumToParent) {
+// Whether some violation of `invariant` carries `text` in its message.
+bool reports_message(const std::vector<Violation>& violations, const std::string& invariant, const std::string& text) {
+  for (const auto& v : violations)
+    if (v.invariant == invariant && v.message.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// The vertex of the leaf mesh at `p` exactly (-1 when there is none).
+int vertex_at(const Hierarchy& h, const Vec3& p) {
+  for (auto v : h.impl().mesh.vertices())
+    if (to_vec3(h.impl().mesh.point(v)) == p) return v.idx();
+  return -1;
+}
+
+// Every node's stored area set to the area its corners span, so the stored-area check stays quiet.
+void store_corner_areas(Hierarchy& h) {
+  std::vector<Vec3> corners;
+  for (NodeId n = 0; n < h.node_count(); ++n) {
+    h.corners(n, corners);
+    h.impl().area[n] = aarad::area(corners);
+  }
+}
+
+// The midpoint (1, 0.5) of R's left edge (a hanging vertex of L) moved by dx into R: R's four children then
+// leave a sliver of area dx / 2 uncovered, while every node's stored area agrees with its corners and nothing
+// leaves its parent. R has area 1, so the children cover 1 - dx / 2 of it.
+std::vector<Violation> with_gap(double dx) {
   Hierarchy h = refined();
-  const NodeId child = h.children(right_node(h))[1];
-  h.impl().area[child] *= 1.0 + 1e-9;
-  EXPECT_TRUE(reports(check_invariants(h), "children-tile-parent")) << describe(check_invariants(h));
+  const int v = vertex_at(h, Vec3(1, 0.5, 0));
+  EXPECT_GE(v, 0);
+  if (v < 0) return {};
+  h.impl().mesh.point(LeafMesh::VertexHandle(v))[0] += dx;
+  store_corner_areas(h);
+  return check_invariants(h);
+}
+
+TEST(InvariantBroken, ChildAreasNoLongerSumToParent) {
+  // The checker's tolerance is 1e-12 relative (docs/hierarchy.md); a gap of 1e-11 of R's area is reported
+  // as the children's sum, a gap of 1e-13 is not.
+  const std::vector<Violation> gap = with_gap(2e-11);
+  EXPECT_TRUE(reports_message(gap, "children-tile-parent", "cover")) << describe(gap);
+  EXPECT_FALSE(reports_message(gap, "children-tile-parent", "stores area")) << describe(gap);
+  EXPECT_FALSE(reports_message(gap, "children-tile-parent", "outside")) << describe(gap);
+  const std::vector<Violation> within = with_gap(2e-13);
+  EXPECT_FALSE(reports_message(within, "children-tile-parent", "cover")) << describe(within);
+}
+
+TEST(InvariantBroken, ChildOutsideItsParentInItsPlane) {
+  // The same midpoint moved out of R into L, within the plane, by 10x the length tolerance (1e-9 of the scene
+  // diagonal): child corners outside R are reported; at a tenth of the tolerance they are not.
+  auto moved = [](double factor) {
+    Hierarchy h = refined();
+    const double tolerance = 1e-9 * h.scene().diagonal();
+    const int v = vertex_at(h, Vec3(1, 0.5, 0));
+    EXPECT_GE(v, 0);
+    if (v < 0) return std::vector<Violation>{};
+    h.impl().mesh.point(LeafMesh::VertexHandle(v))[0] -= factor * tolerance;
+    store_corner_areas(h);
+    return check_invariants(h);
+  };
+  const std::vector<Violation> outside = moved(10.0);
+  EXPECT_TRUE(reports_message(outside, "children-tile-parent", "lies outside node")) << describe(outside);
+  EXPECT_FALSE(reports_message(outside, "children-tile-parent", "off the plane")) << describe(outside);
+  const std::vector<Violation> within = moved(0.1);
+  EXPECT_FALSE(reports_message(within, "children-tile-parent", "lies outside node")) << describe(within);
+}
+
+TEST(InvariantBroken, ChildNotCounterClockwise) {
+  Hierarchy h = refined();
+  const NodeId child = h.children(right_node(h))[3];
+  ASSERT_EQ(h.corner_count(child), 4);
+  std::array<int, 4>& c = h.impl().corners[child];
+  std::reverse(c.begin(), c.end());  // same corners, same area, clockwise
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(reports_message(violations, "children-tile-parent",
+                              "child " + std::to_string(child) + " of node " + std::to_string(right_node(h)) +
+                                  " is not counter-clockwise"))
+      << describe(violations);
+  EXPECT_FALSE(reports_message(violations, "children-tile-parent", "stores area")) << describe(violations);
 }
 
 TEST(InvariantBroken, ChildrenOverlap) {
@@ -198,7 +276,18 @@ TEST(InvariantBroken, InnerRadiosityIsNotTheMeanOfItsLeaves) {
 TEST(InvariantBroken, StoredAreaWrong) {
   Hierarchy h = refined();
   h.impl().area[left_leaf(h)] = 0.5;
-  EXPECT_TRUE(reports(check_invariants(h), "children-tile-parent")) << describe(check_invariants(h));
+  EXPECT_TRUE(reports_message(check_invariants(h), "children-tile-parent", "stores area 0.5"))
+      << describe(check_invariants(h));
+  // 10x the 1e-12 relative tolerance on one child's stored area is reported, 0.1x is not.
+  Hierarchy g = refined();
+  const NodeId child = g.children(right_node(g))[1];
+  const double area = g.impl().area[child];
+  g.impl().area[child] = area * (1.0 + 1e-11);
+  EXPECT_TRUE(reports_message(check_invariants(g), "children-tile-parent", "node " + std::to_string(child) + " stores area"))
+      << describe(check_invariants(g));
+  g.impl().area[child] = area * (1.0 + 1e-13);
+  EXPECT_FALSE(reports_message(check_invariants(g), "children-tile-parent", "stores area"))
+      << describe(check_invariants(g));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstdio>
@@ -25,12 +26,18 @@ const Scene& cornell() {
   return scene;
 }
 
+// global_control only caps the threads; an arena with that many slots makes them available even on a runner
+// with fewer CPUs, where the default arena would have fewer.
 CornellRun solve_cornell(int threads) {
   tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  tbb::task_arena arena(threads);
   SolverOptions options;
   options.meshing = default_meshing(cornell());
   CornellRun run{std::make_unique<Solver>(cornell(), options), {}};
-  run.solver->run();
+  arena.execute([&] {
+    EXPECT_EQ(tbb::this_task_arena::max_concurrency(), threads);
+    run.solver->run();
+  });
   run.radiosity = run.solver->radiosity();
   std::printf("cornell, %d thread(s): %lld shots, %zu elements, max level %d, %.2f s (form factors %.2f s)\n",
               threads, static_cast<long long>(run.solver->shots()), run.solver->hierarchy().leaf_count(),
