@@ -1,6 +1,7 @@
 // Image writing through OpenImageIO and the display tone map (see image.h and docs/solver.md).
 #include "core/image.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 #include <OpenImageIO/imageio.h>
@@ -8,8 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <system_error>
-#include <unistd.h>
 
 namespace aarad {
 
@@ -62,27 +61,6 @@ Image8 tone_map(const Image& image, const ToneMap& map) {
     out.pixels[i + 2] = v[2];
   }
   return out;
-}
-
-void write_file_atomically(const std::filesystem::path& path,
-                           const std::function<void(const std::filesystem::path& temporary)>& write) {
-  namespace fs = std::filesystem;
-  const fs::path temporary = path.parent_path() / ("." + path.stem().string() + ".tmp" +
-                                                   std::to_string(::getpid()) + path.extension().string());
-  try {
-    write(temporary);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw;
-  }
-  std::error_code error;
-  fs::rename(temporary, path, error);
-  if (error) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw Error("cannot rename " + temporary.string() + " to " + path.string() + ": " + error.message());
-  }
 }
 
 namespace {

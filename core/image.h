@@ -1,6 +1,6 @@
 // Images: linear float RGB, the tone map that turns radiosity into display values, and writing through
-// OpenImageIO (PNG 8-bit sRGB, OpenEXR float linear). Every file is written under a temporary name in the
-// same directory and renamed, so the destination is whole or untouched.
+// OpenImageIO (PNG 8-bit sRGB, OpenEXR float linear). Every file is written through write_file_atomically
+// (core/atomic_file.h), so the destination is whole or untouched.
 //
 // Tone map (documented in docs/solver.md): a display value v = exposure * B per channel, clipped to [0, 1],
 // then encoded with the sRGB transfer function (IEC 61966-2-1) and rounded to 8 bits. ToneMap::from_percentile
@@ -12,7 +12,6 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
-#include <functional>
 #include <span>
 #include <vector>
 
@@ -65,12 +64,6 @@ struct ToneMap {
 };
 
 Image8 tone_map(const Image& image, const ToneMap& map);
-
-// Writes `path` whole or not at all: `write` receives a temporary path in the same directory (with the same
-// extension) to write to, which is then renamed to `path`. On failure the temporary file is removed and the
-// exception propagates.
-void write_file_atomically(const std::filesystem::path& path,
-                           const std::function<void(const std::filesystem::path& temporary)>& write);
 
 // PNG, 8-bit RGB. Throws aarad::Error naming the path on failure.
 void write_png(const Image8& image, const std::filesystem::path& path);

@@ -2,6 +2,7 @@
 // material format"), the inverse of core/obj_import.cpp.
 #include "core/obj_export.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 #include <charconv>
@@ -42,17 +43,12 @@ std::string comment_lines(const std::string& comment) {
 }
 
 void write_whole(const std::filesystem::path& path, const std::string& text) {
-  // Under a temporary name first, so the file is whole or absent.
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  {
+  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out << text;
     out.close();
     if (!out) throw Error(path.string() + ": cannot write the file; check that its folder exists and is writable");
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) throw Error(path.string() + ": cannot write the file (" + ec.message() + ")");
+  });
 }
 
 }  // namespace

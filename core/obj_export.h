@@ -15,8 +15,8 @@ namespace aarad {
 std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const std::string& comment = "");
 // The MTL text: per material `newmtl`, `Kd` (reflectance) and `Ke` (emission).
 std::string mtl_text(const Scene& scene, const std::string& comment = "");
-// Writes `obj_path` and, beside it, the MTL file with the same stem. Throws aarad::Error when a file
-// cannot be written.
+// Writes `obj_path` and, beside it, the MTL file with the same stem, each whole or not at all
+// (core/atomic_file.h). Throws aarad::Error when a file cannot be written.
 void write_obj(const Scene& scene, const std::string& obj_path, const std::string& comment = "");
 
 }  // namespace aarad

@@ -1,12 +1,13 @@
 // Export of the leaf mesh as binary PLY (Turk's polygon file format): one polygon per leaf element with its
 // hanging vertices (so the file has no crack), vertex colours from the display reconstruction through the
-// tone map, and per-face float properties radiosity_r, radiosity_g, radiosity_b, level, patch
-// (../shared/design.md, "solve --out"). OpenMesh writes persistent custom face properties with
+// caller's VertexColour (a tone map), and per-face float properties radiosity_r, radiosity_g, radiosity_b,
+// level, patch (../shared/design.md, "solve --out"). OpenMesh writes persistent custom face properties with
 // IO::Options::Custom.
 #include <OpenMesh/Core/IO/MeshIO.hh>
 
 #include "mesh/export_ply.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "mesh/display.h"
 #include "mesh/leaf_mesh.h"
@@ -14,11 +15,10 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 
 #include <fstream>
-#include <system_error>
 
 namespace aarad::mesh {
 
-void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const ToneMap& tone_map,
+void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const VertexColour& vertex_colour,
                const std::filesystem::path& path) {
   const Hierarchy::Impl& m = hierarchy.impl();
   const DisplayMesh display = build_display_mesh(hierarchy, node_values);
@@ -30,7 +30,7 @@ void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, con
   for (std::size_t v = 0; v < vertex_count; ++v) {
     const Vec3& p = display.positions[v];
     const auto vh = out.add_vertex(ExportMesh::Point(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)));
-    const std::array<std::uint8_t, 3> c = tone_map(display.vertex_values[v]);
+    const std::array<std::uint8_t, 3> c = vertex_colour(display.vertex_values[v]);
     out.set_color(vh, ExportMesh::Color(c[0], c[1], c[2]));
   }
   OpenMesh::FPropHandleT<float> radiosity_r, radiosity_g, radiosity_b, level, patch;
@@ -55,27 +55,15 @@ void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, con
     out.property(patch, f) = static_cast<float>(hierarchy.patch(leaf));
   }
 
-  std::filesystem::path temporary = path;
-  temporary += ".tmp";
-  {
+  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
     std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
-    if (!stream) throw Error(temporary.string() + ": cannot open for writing");
+    if (!stream) throw Error(path.string() + ": cannot open " + temporary.string() + " for writing");
     const OpenMesh::IO::Options options =
         OpenMesh::IO::Options::Binary | OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::Custom;
     const bool written = OpenMesh::IO::write_mesh(out, stream, ".ply", options);
     stream.close();
-    if (!written || !stream) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw Error(path.string() + ": writing the PLY mesh failed");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::filesystem::remove(temporary, error);
-    throw Error(path.string() + ": cannot rename the finished PLY file into place");
-  }
+    if (!written || !stream) throw Error(path.string() + ": writing the PLY mesh failed");
+  });
 }
 
 }  // namespace aarad::mesh

@@ -12,12 +12,14 @@
 
 namespace aarad::mesh {
 
-using ToneMap = std::function<std::array<std::uint8_t, 3>(const Rgb&)>;
+// The 8-bit colour of a vertex from its display radiosity: a tone map (`aarad solve` passes the exposure and
+// sRGB encoding of aarad::ToneMap, core/image.h, that its PNGs use).
+using VertexColour = std::function<std::array<std::uint8_t, 3>(const Rgb&)>;
 
 // node_values is indexed by NodeId (only leaves read): the per-face radiosity. Vertex colours are the
-// display reconstruction of those values through `tone_map`. Written to a temporary name and renamed, so
-// `path` is whole or untouched; throws aarad::Error naming the path on failure.
-void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const ToneMap& tone_map,
+// display reconstruction of those values through `vertex_colour`. Written through write_file_atomically
+// (core/atomic_file.h), so `path` is whole or untouched; throws aarad::Error naming the path on failure.
+void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const VertexColour& vertex_colour,
                const std::filesystem::path& path);
 
 }  // namespace aarad::mesh

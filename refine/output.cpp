@@ -1,6 +1,7 @@
 // Output files of a solve; see output.h and docs/solver.md for the tone map and what each image shows.
 #include "refine/output.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "mesh/display.h"
 #include "mesh/export_ply.h"

@@ -142,7 +142,7 @@ TEST(HierarchyExport, PlyIsBinaryAndReadsBackWithFaceProperties) {
   std::filesystem::create_directories(dir);
   const auto path = dir / "mesh.ply";
   std::filesystem::remove(path);
-  const ToneMap grey = [](const Rgb& b) {
+  const VertexColour grey = [](const Rgb& b) {
     const auto v = static_cast<std::uint8_t>(std::clamp(b.r * 40.0, 0.0, 255.0));
     return std::array<std::uint8_t, 3>{v, v, v};
   };
