@@ -72,12 +72,12 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       // the walk's fractions refer to the area receivers can cover there.
       if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
       const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
-      double z = depth.at(px, py);
-      if (!(z >= box.lo)) z = box.lo;
-      if (z > box.hi) z = box.hi;
+      double inverse_depth = depth.at(px, py);
+      if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
+      if (inverse_depth > box.hi) inverse_depth = box.hi;
       // Key -1/depth orders like the depth without a division.
       ++offered;
-      arena.insert(x, y, CoverageEntry{-z, coverage, receiver, surface, spread});
+      arena.insert(x, y, CoverageEntry{-inverse_depth, coverage, receiver, surface, spread});
     });
   }
   task_entries_[static_cast<std::size_t>(task)] = offered;

@@ -42,8 +42,8 @@ class AaHemicubeBackend final : public FormFactorBackend {
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
 
-  const HemicubeGeometry& geometry() const { return geometry_; }
-  // Entries inserted into the coverage lists by the last compute(), summed over faces (for benchmarks).
+  // Entries offered to the coverage arena by the last compute(), summed over faces (for benchmarks): every
+  // covered pixel of every clipped receiver, including full entries kept inline and entries the arena refused.
   std::size_t last_entries() const;
 
  private:

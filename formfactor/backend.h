@@ -44,7 +44,8 @@ class FormFactorBackend {
 };
 
 // Creates the back end registered as `name` ("aa-hemicube", "hemicube", "analytic"); throws aarad::Error
-// naming the known back ends when there is none, or when the options are out of range.
+// naming the known back ends when there is none, or when an option the back end uses is out of range (the
+// resolution, [2, 8192], for the hemicubes; the analytic back end ignores it).
 std::unique_ptr<FormFactorBackend> make_backend(std::string_view name, const BackendOptions& options = {});
 std::vector<std::string> backend_names();
 

@@ -44,12 +44,12 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
     sample_polygon(std::span<const Vec2>(b.projected.data(), m), task.x0, task.x1, height, sample_y, b.crossings,
                    [&](int x, int y) {
                      // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
-                     double z = depth.at(x + 0.5, sample_y(y));
-                     if (!(z >= box.lo)) z = box.lo;
-                     if (z > box.hi) z = box.hi;
+                     double inverse_depth = depth.at(x + 0.5, sample_y(y));
+                     if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
+                     if (inverse_depth > box.hi) inverse_depth = box.hi;
                      const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
-                     if (z > b.inverse_depth[p]) {
-                       b.inverse_depth[p] = z;
+                     if (inverse_depth > b.inverse_depth[p]) {
+                       b.inverse_depth[p] = inverse_depth;
                        b.item[p] = item;
                      }
                    });

@@ -85,8 +85,6 @@ class HemicubeBackend final : public FormFactorBackend {
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
 
-  const HemicubeGeometry& geometry() const { return geometry_; }
-
  private:
   struct FaceBuffers {
     std::vector<double> inverse_depth;  // per pixel; 0 = nothing seen yet

@@ -29,7 +29,7 @@ double side_corner_form_factor(double y, double z) {
 }
 
 HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
-    : resolution_(resolution), rule_(rule), side_rows_((resolution + 1) / 2) {
+    : resolution_(resolution), side_rows_((resolution + 1) / 2) {
   check_resolution(resolution);
   const int n = resolution_;
   const double cell = 2.0 / n;
@@ -42,7 +42,7 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
   // Top face.
   std::vector<double>& top = delta_[0];
   top.assign(static_cast<std::size_t>(n) * n, 0.0);
-  if (rule_ == DeltaRule::kExactCell) {
+  if (rule == DeltaRule::kExactCell) {
     std::vector<double> corner(static_cast<std::size_t>(n + 1) * (n + 1));
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) corner[static_cast<std::size_t>(j) * (n + 1) + i] = top_corner_form_factor(node(i), node(j));
@@ -63,7 +63,7 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
 
   // Side faces: identical tables (the four faces are congruent), row r = height above the base.
   std::vector<double> side(static_cast<std::size_t>(n) * side_rows_, 0.0);
-  if (rule_ == DeltaRule::kExactCell) {
+  if (rule == DeltaRule::kExactCell) {
     std::vector<double> corner(static_cast<std::size_t>(n + 1) * (side_rows_ + 1));
     for (int r = 0; r <= side_rows_; ++r)
       for (int i = 0; i <= n; ++i)
@@ -105,8 +105,8 @@ void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const Prepare
   std::array<int, kFaceTasks> order{};
   for (int k = 0; k < kFaceTasks; ++k) {
     const FaceTask& t = tasks[static_cast<std::size_t>(k)];
-    const double face_width = t.face == HemicubeFace::kTop ? 2.0 : 1.0;  // tasks per face
-    load[static_cast<std::size_t>(k)] = static_cast<double>(prepared.face_receivers(t.face)) / face_width;
+    const double tasks_of_face = t.face == HemicubeFace::kTop ? 2.0 : 1.0;
+    load[static_cast<std::size_t>(k)] = static_cast<double>(prepared.face_receivers(t.face)) / tasks_of_face;
     order[static_cast<std::size_t>(k)] = k;
   }
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {

@@ -69,7 +69,6 @@ class HemicubeGeometry {
   explicit HemicubeGeometry(int resolution, DeltaRule rule = DeltaRule::kExactCell);
 
   int resolution() const { return resolution_; }
-  DeltaRule rule() const { return rule_; }
   int width(HemicubeFace) const { return resolution_; }
   int height(HemicubeFace face) const { return face == HemicubeFace::kTop ? resolution_ : side_rows_; }
   std::size_t pixels(HemicubeFace face) const {
@@ -90,7 +89,6 @@ class HemicubeGeometry {
  private:
   static std::size_t index(HemicubeFace face) { return static_cast<std::size_t>(face); }
   int resolution_;
-  DeltaRule rule_;
   int side_rows_;
   double half_row_sample_y_;
   std::array<std::vector<double>, kHemicubeFaces> delta_;
@@ -211,7 +209,6 @@ class PreparedReceivers {
   // OR of the outcodes of receiver i's vertices.
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   const Plane& local_plane(std::size_t i) const { return local_planes_[i]; }
-  std::size_t size() const { return face_mask_.size(); }
   // Number of receivers that may touch face f (a cheap estimate of the face's work).
   std::size_t face_receivers(HemicubeFace face) const { return face_receivers_[static_cast<std::size_t>(face)]; }
 

@@ -239,18 +239,20 @@ void Hierarchy::add_radiosity(NodeId leaf, const Rgb& delta) {
   for (NodeId a = m.parent[leaf]; a != kNoNode; a = m.parent[a]) m.radiosity[a] += delta * (m.area[leaf] / m.area[a]);
 }
 
-void Hierarchy::update_inner_radiosity() {
-  Impl& m = *impl_;
+void Hierarchy::update_inner_radiosity() { average_inner_nodes(impl_->radiosity); }
+
+void Hierarchy::average_inner_nodes(std::span<Rgb> values) const {
+  const Impl& m = *impl_;
   for (std::size_t i = m.parent.size(); i-- > 0;) {  // children have larger ids than their parent
     const auto node = static_cast<NodeId>(i);
     if (m.child_count[node] == 0) continue;
     Rgb sum;
     double area = 0.0;
     for (NodeId c : children(node)) {
-      sum += m.radiosity[c] * m.area[c];
+      sum += values[c] * m.area[c];
       area += m.area[c];
     }
-    m.radiosity[node] = sum / area;
+    if (area > 0.0) values[node] = sum / area;
   }
 }
 

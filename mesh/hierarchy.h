@@ -82,6 +82,9 @@ class Hierarchy {
   void add_radiosity(NodeId leaf, const Rgb& delta);
   // Recomputes the radiosity of every inner node as the area-weighted mean of its children, bottom up. O(n).
   void update_inner_radiosity();
+  // The same on `values` (one per node, indexed by NodeId) instead of the stored radiosity: leaves keep their
+  // value, every inner node gets the area-weighted mean of its children's, bottom up. O(n).
+  void average_inner_nodes(std::span<Rgb> values) const;
 
   // Leaves in a deterministic order (by node id). leaf_count() is O(1).
   std::vector<NodeId> leaves() const;

@@ -445,37 +445,14 @@ void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
   times_.total = total_before + seconds_since(start);
 }
 
-namespace {
-
-// Post-order: a node's B becomes the area-weighted mean of its children's.
-Rgb pull_up_node(const mesh::Hierarchy& hierarchy, mesh::NodeId node, std::vector<Rgb>& values) {
-  const auto children = hierarchy.children(node);
-  if (children.empty()) return values[node];
-  Rgb sum{};
-  double area = 0.0;
-  for (mesh::NodeId child : children) {
-    sum += pull_up_node(hierarchy, child, values) * hierarchy.area(child);
-    area += hierarchy.area(child);
-  }
-  values[node] = area > 0.0 ? sum / area : values[node];
-  return values[node];
-}
-
-}  // namespace
-
 std::vector<Rgb> Solver::radiosity() const {
   std::vector<Rgb> values(hierarchy_.node_count());
   for (mesh::NodeId node = 0; node < values.size(); ++node) values[node] = hierarchy_.radiosity(node);
-  for (mesh::NodeId patch : hierarchy_.patches()) pull_up_node(hierarchy_, patch, values);
+  hierarchy_.average_inner_nodes(values);
   return values;
 }
 
-void Solver::pull_up() {
-  const std::vector<Rgb> values = radiosity();
-  for (mesh::NodeId node = 0; node < values.size(); ++node) {
-    if (!hierarchy_.is_leaf(node)) hierarchy_.radiosity(node) = values[node];
-  }
-}
+void Solver::pull_up() { hierarchy_.update_inner_radiosity(); }
 
 Rgb Solver::ambient() const {
   // Cohen et al. 1988, section 3.2: R = 1 / (1 - rho_avg), ambient = R sum dB_i A_i / sum A_i.
