@@ -1,6 +1,7 @@
 // `aarad solve [SCENE]`: progressive-refinement radiosity with adaptive substructuring (refine/solver.h),
 // progress on stderr, Ctrl-C to stop after the current shot, and the output files of ../shared/design.md.
-// Exit codes (docs/solver.md): 0 converged or stopped at --max-shots, 1 bad input, 2 usage, 130 interrupted.
+// Exit codes (docs/solver.md): 0 converged or stopped at --max-shots, 1 bad input, 2 usage, 3 internal error
+// (main.cpp), 130 interrupted.
 #include "apps/aarad/commands.h"
 
 #include "core/builtin_scenes.h"
@@ -128,9 +129,9 @@ void run_solve(SolveCommandOptions options) {
   }
 
   const Scene scene = load_scene(options.scene);
-  for (const std::string& warning : scene.warnings) {
-    if (!options.quiet) std::fprintf(stderr, "aarad: warning: %s\n", warning.c_str());
-  }
+  // Warnings are problems the user must see: they go to stderr even with --quiet, which silences only the
+  // progress and the summary.
+  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", warning.c_str());
   refine::SolverOptions solver_options = options.solver;
   solver_options.meshing = refine::default_meshing(scene);
   if (options.patch_size) solver_options.meshing.patch_size = *options.patch_size;
@@ -145,7 +146,7 @@ void run_solve(SolveCommandOptions options) {
   if (!(solver.emitted_flux().sum() > 0.0)) {
     throw Error(scene.name + ": nothing in the scene emits light (no material with Ke above 0), so the solution "
                 "would be black" +
-                (scene.warnings.empty() || options.quiet ? std::string() : " (see the warnings above)"));
+                (scene.warnings.empty() ? std::string() : " (see the warnings above)"));
   }
   const bool show_progress = !options.quiet;
   if (show_progress) {
@@ -217,7 +218,7 @@ void add_solve_command(CLI::App& app) {
       ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
   cmd->add_flag("--adaptive,!--no-adaptive", options->solver.adaptive,
-                "Adaptive substructuring on radiosity gradients (default on)");
+                "Adaptive substructuring on radiosity gradients: on by default (--adaptive), off with --no-adaptive");
   cmd->add_option("--gradient", options->solver.gradient,
                   "Split when neighbours' luminance differs by more than this x the largest reflected radiosity")
       ->check(number_in(0.0, End::kOpen, kInfinity, End::kOpen))
@@ -254,7 +255,7 @@ void add_solve_command(CLI::App& app) {
       ->check(CLI::Range(1, 16384))
       ->capture_default_str();
   cmd->add_flag("--json", options->json, "Print the report as one JSON object on stdout, nothing else there");
-  cmd->add_flag("--quiet", options->quiet, "No progress or summary on stderr/stdout");
+  cmd->add_flag("--quiet", options->quiet, "No progress or summary (warnings and errors still go to stderr)");
   cmd->callback([options] { run_solve(*options); });
 }
 

@@ -3,14 +3,33 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 
 namespace aarad::app {
 namespace {
 int g_exit_code = 0;
-}
+
+// CLI11 shows a flag pair such as "--adaptive,!--no-adaptive" as "--adaptive,--no-adaptive{false}" (the value
+// the second name stores), which reads like a default of false. The help shows the names as they are typed; the
+// description says which is the default.
+class HelpFormatter : public CLI::Formatter {
+ public:
+  std::string make_option_name(const CLI::Option* option, bool is_positional) const override {
+    std::string names = CLI::Formatter::make_option_name(option, is_positional);
+    for (std::size_t open = names.find('{'); open != std::string::npos; open = names.find('{', open)) {
+      const std::size_t close = names.find('}', open);
+      if (close == std::string::npos) break;
+      names.erase(open, close + 1 - open);
+    }
+    return names;
+  }
+};
+
+}  // namespace
 
 void add_commands(CLI::App& app) {
+  app.formatter(std::make_shared<HelpFormatter>());  // before the sub-commands, which copy it
   add_inspect_command(app);
   add_formfactors_command(app);
   add_solve_command(app);

@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "aarad: error: %s\n", e.what());
     return 1;
   } catch (const std::exception& e) {
+    // Anything else (out of memory, a bug) is an internal error: exit code 3 (docs/solver.md).
     std::fprintf(stderr, "aarad: internal error: %s\n", e.what());
     return 3;
   }
