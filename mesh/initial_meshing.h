@@ -28,12 +28,15 @@ struct SurfaceMeshing {
 
 // A surface that is one strictly convex quadrilateral becomes a bilinear grid of quad patches (no edge
 // longer than patch_size), each patch an equal grid of quad elements (no edge longer than element_size).
-// Any other surface (triangles, concave faces, several faces, holes) is the union of its faces, triangulated
-// by a constrained Delaunay mesher (CGAL) into triangle patches with edges no longer than patch_size, each
-// patch divided into m x m similar triangles (m the same over the surface, so patches conform).
-// Throws aarad::Error naming the surface's group, before allocating, when it would make more than max_elements
-// patches or elements: what the scene's limit (MeshingOptions::max_initial_elements, named in the message) leaves
-// after the surfaces meshed before it.
+// A surface that is one triangle of positive area becomes an n x n grid of similar triangle patches (no edge
+// longer than patch_size). Any other surface (concave faces, several faces, holes) is the union of its faces,
+// triangulated by a constrained Delaunay mesher (CGAL) into triangle patches with edges no longer than
+// patch_size. Triangle patches are divided into m x m similar triangles (m the same over the surface, so
+// patches conform).
+// Throws aarad::Error naming the surface's group when it would make more than max_elements patches or
+// elements: what the scene's limit (MeshingOptions::max_initial_elements, named in the message) leaves after
+// the surfaces meshed before it. Counts are exact and checked before allocating, except the patches of a
+// Delaunay-meshed surface: bounded by its area before the mesher runs, counted exactly after it.
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size,
                             double max_elements, double scene_limit);
 
