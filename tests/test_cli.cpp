@@ -125,8 +125,17 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
       {"solve --gradient nan", "must be a finite number > 0"},   {"solve --converge nan", "must be a number in [0, 1]"},
       {"solve --converge 1.5", "must be a number in [0, 1]"},    {"solve --patch-size inf", "must be a finite number >= 0"},
       {"solve --element-size -2", "must be a finite number >= 0"}, {"solve --min-area nan", "must be a finite number >= 0"},
-      {"solve --threads -1", "must be a finite number >= 0"},    {"solve --max-shots -3", "must be a finite number >= 0"},
+      {"solve --threads -1", "must be a whole number in [0, 1024]"}, {"solve --max-shots -3", "must be a whole number >= 0"},
       {"solve --relaxation nan", "must be a number in [1, 2)"},
+      // Integer options: a fraction, an exponent or trailing letters is not a whole number, whatever its range.
+      {"solve --max-level 1.5", "Value 1.5 must be a whole number in [1, 60]"},
+      {"solve --max-shots 1e3", "Value 1e3 must be a whole number >= 0"},
+      {"solve --resolution 100.5", "must be a whole number in [2, 8192]"},
+      {"solve --resolution 1", "must be a whole number in [2, 8192]"},
+      {"solve --threads 2x", "must be a whole number in [0, 1024]"},
+      {"solve --width 0", "must be a whole number in [1, 16384]"},
+      {"solve --shooter-samples 99999999999999999999", "must be a whole number in [1, 64]"},
+      {"formfactors cornell --from light --resolution 2.0", "must be a whole number in [2, 8192]"},
   };
   for (const auto& [command, expected] : cases) {
     const ProgramRun r = aarad(command);

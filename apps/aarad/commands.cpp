@@ -1,5 +1,6 @@
 #include "apps/aarad/commands.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -59,6 +60,22 @@ CLI::Validator number_in(double low, End low_end, double high, End high_end) {
         if (number && above && below) return {};
         return "Value " + text + " must be a " + (high_end == End::kOpen && std::isinf(high) ? "finite " : "") +
                "number " + (wanted.front() == '>' ? "" : "in ") + wanted;
+      },
+      wanted);
+}
+
+CLI::Validator whole_number_in(long long low, long long high) {
+  const std::string wanted =
+      high == kNoLimit ? ">= " + std::to_string(low) : "in [" + std::to_string(low) + ", " + std::to_string(high) + "]";
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        std::size_t digits = text.empty() || (text[0] != '-' && text[0] != '+') ? 0 : 1;
+        const bool whole = digits < text.size() &&
+                           text.find_first_not_of("0123456789", digits) == std::string::npos;
+        errno = 0;
+        const long long value = whole ? std::strtoll(text.c_str(), nullptr, 10) : 0;
+        if (whole && errno == 0 && value >= low && value <= high) return {};
+        return "Value " + text + " must be a whole number " + wanted;
       },
       wanted);
 }
