@@ -295,17 +295,24 @@ void Solver::update_deposits() {
   deposits_source_ = &hierarchy_.impl();
 }
 
-void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
-  auto start = Clock::now();
-  const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
-  // Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the
-  // threshold grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this
-  // is a heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
-  // neighbours); leaves made by splits are asked of the hierarchy directly.
+namespace {
+
+// The gradient test of adaptive substructuring: two edge-neighbours whose luminances differ by more than the
+// threshold (--gradient times the largest reflected luminance) are both split.
+bool too_steep(double luminance, double neighbour_luminance, double threshold) {
+  return std::abs(luminance - neighbour_luminance) > threshold;
+}
+
+}  // namespace
+
+// Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the threshold
+// grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this is a
+// heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
+// neighbours), in parallel, with the same result whatever the thread count: a maximum, and a set of flags (a flag
+// may be set by two threads at once, to the same value). Candidates come out by node id.
+std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   neighbours_.update(hierarchy_, cache_);
   update_deposits();
-  // Both loops run in parallel and give the same result whatever the thread count: a maximum, and a set of flags
-  // (a flag may be set by two threads at once, to the same value).
   luminance_.resize(cache_.size());
   const double largest = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
@@ -319,68 +326,102 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
       },
       [](double a, double b) { return std::max(a, b); });
   std::vector<mesh::NodeId> candidates;
-  double threshold = options_.gradient * largest;
-  if (threshold > 0.0) {
-    candidate_flag_.assign(cache_.size(), 0);
-    const auto flag = [this](std::uint32_t r) {
-      std::atomic_ref<std::uint8_t>(candidate_flag_[r]).store(1, std::memory_order_relaxed);
-    };
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_.size(), 1024),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                          const std::uint32_t r = touched_[t];
-                          const double own = luminance_[r];
-                          for (const std::uint32_t neighbour : neighbours_.of(r)) {
-                            if (std::abs(own - luminance_[neighbour]) > threshold) {
-                              flag(r);
-                              flag(neighbour);
-                            }
+  const double threshold = options_.gradient * largest;
+  if (!(threshold > 0.0)) return candidates;
+  candidate_flag_.assign(cache_.size(), 0);
+  const auto flag = [this](std::uint32_t r) {
+    std::atomic_ref<std::uint8_t>(candidate_flag_[r]).store(1, std::memory_order_relaxed);
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_.size(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                        const std::uint32_t r = touched_[t];
+                        for (const std::uint32_t neighbour : neighbours_.of(r)) {
+                          if (too_steep(luminance_[r], luminance_[neighbour], threshold)) {
+                            flag(r);
+                            flag(neighbour);
                           }
                         }
-                      });
-    for (std::size_t r = 0; r < cache_.size(); ++r)
-      if (candidate_flag_[r] != 0) candidates.push_back(cache_.leaf(r));  // by node id, as leaves are
-  }
+                      }
+                    });
+  for (std::size_t r = 0; r < cache_.size(); ++r)
+    if (candidate_flag_[r] != 0) candidates.push_back(cache_.leaf(r));  // by node id, as leaves are
+  return candidates;
+}
 
-  std::vector<mesh::NodeId> split_nodes;
-  std::vector<mesh::NodeId> new_leaves;
+// Leaves made by splits are not in the flat tables yet: they and their neighbours are asked of the hierarchy.
+// Sorted by node id, without repeats.
+std::vector<mesh::NodeId> Solver::steep_leaves_among(std::span<const mesh::NodeId> new_leaves) const {
+  std::vector<mesh::NodeId> candidates;
+  const double threshold = options_.gradient * largest_reflected_luminance();
+  if (!(threshold > 0.0)) return candidates;
   std::vector<mesh::NodeId> around;
+  for (mesh::NodeId leaf : new_leaves) {
+    const double own = hierarchy_.radiosity(leaf).luminance();
+    hierarchy_.edge_neighbours(leaf, around);
+    for (mesh::NodeId neighbour : around) {
+      if (too_steep(own, hierarchy_.radiosity(neighbour).luminance(), threshold)) {
+        candidates.push_back(leaf);
+        candidates.push_back(neighbour);
+      }
+    }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  return candidates;
+}
+
+// Splits the candidates that may be split; returns every node split, balancing's included.
+std::vector<mesh::NodeId> Solver::split_candidates(std::span<const mesh::NodeId> candidates) {
+  std::vector<mesh::NodeId> split_nodes;
+  for (mesh::NodeId candidate : candidates) {
+    // Already split by balancing, or at the deepest level or smallest area (asked first: a refused split
+    // composes its reason, and such leaves come back as candidates shot after shot).
+    if (!hierarchy_.can_split(candidate)) continue;
+    const mesh::SplitResult result = hierarchy_.split(candidate);
+    if (!result.ok) continue;
+    split_nodes.push_back(candidate);
+    for (mesh::NodeId other : result.also_split) split_nodes.push_back(other);
+  }
+  splits_ += static_cast<std::int64_t>(split_nodes.size());
+  return split_nodes;
+}
+
+// After a round of splits (nodes from first_new on are new): takes the split leaves' share of this shot back
+// from their patches' unshot radiosity and the absorbed flux, and from the B the new leaves inherited. Returns
+// the new leaves.
+std::vector<mesh::NodeId> Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes,
+                                                         mesh::NodeId first_new) {
+  std::vector<mesh::NodeId> new_leaves;
+  for (mesh::NodeId node = first_new; node < hierarchy_.node_count(); ++node) {
+    if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
+  }
+  incident_.resize(hierarchy_.node_count(), Rgb{});
+  for (mesh::NodeId old_leaf : split_nodes) {
+    if (old_leaf >= first_new) continue;
+    receive(old_leaf, incident_[old_leaf], -1.0);
+  }
+  for (mesh::NodeId leaf : new_leaves) {
+    mesh::NodeId ancestor = leaf;  // the node that was a leaf when the shot was received
+    while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
+    const Rgb inherited_share = material(ancestor).reflectance * incident_[ancestor] / hierarchy_.area(ancestor);
+    hierarchy_.radiosity(leaf) -= inherited_share;
+    hierarchy_.unshot(leaf) = Rgb{};
+  }
+  return new_leaves;
+}
+
+void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
+  auto start = Clock::now();
+  const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
+  std::vector<mesh::NodeId> candidates = steep_leaves_of_shot();
   while (!candidates.empty()) {
-    const mesh::NodeId first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
-    split_nodes.clear();
-    for (mesh::NodeId candidate : candidates) {
-      // Already split by balancing, or at the deepest level or smallest area (asked first: a refused split
-      // composes its reason, and such leaves come back as candidates shot after shot).
-      if (!hierarchy_.can_split(candidate)) continue;
-      const mesh::SplitResult result = hierarchy_.split(candidate);
-      if (!result.ok) continue;
-      split_nodes.push_back(candidate);
-      for (mesh::NodeId other : result.also_split) split_nodes.push_back(other);
-    }
-    candidates.clear();
+    const auto first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
+    const std::vector<mesh::NodeId> split_nodes = split_candidates(candidates);
     if (split_nodes.empty()) break;
-    splits_ += static_cast<std::int64_t>(split_nodes.size());
+    const std::vector<mesh::NodeId> new_leaves = take_back_split_shares(split_nodes, first_new);
 
-    // Leaves made in this round and, for each, the node that was a leaf when the shot was received.
-    new_leaves.clear();
-    for (mesh::NodeId node = first_new; node < hierarchy_.node_count(); ++node) {
-      if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
-    }
-    incident_.resize(hierarchy_.node_count(), Rgb{});
-    // Remove the old leaves' share of this shot: from their patches' unshot radiosity and the absorbed flux,
-    // and from the B the new leaves inherited.
-    for (mesh::NodeId old_leaf : split_nodes) {
-      if (old_leaf >= first_new) continue;
-      receive(old_leaf, incident_[old_leaf], -1.0);
-    }
-    for (mesh::NodeId leaf : new_leaves) {
-      mesh::NodeId ancestor = leaf;
-      while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
-      const Rgb inherited_share = material(ancestor).reflectance * incident_[ancestor] / hierarchy_.area(ancestor);
-      hierarchy_.radiosity(leaf) -= inherited_share;
-      hierarchy_.unshot(leaf) = Rgb{};
-    }
-
+    // This shot again, into the new leaves only, every other receiver still occluding.
     cache_.update(hierarchy_);
     subset_.clear();
     for (mesh::NodeId leaf : new_leaves) {
@@ -399,20 +440,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
       incident_written_.push_back(leaf);
       receive(leaf, incident_[leaf], 1.0);
     }
-    threshold = options_.gradient * largest_reflected_luminance();
-    if (!(threshold > 0.0)) continue;
-    for (mesh::NodeId leaf : new_leaves) {
-      const double own = hierarchy_.radiosity(leaf).luminance();
-      hierarchy_.edge_neighbours(leaf, around);
-      for (mesh::NodeId neighbour : around) {
-        if (std::abs(own - hierarchy_.radiosity(neighbour).luminance()) > threshold) {
-          candidates.push_back(leaf);
-          candidates.push_back(neighbour);
-        }
-      }
-    }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    candidates = steep_leaves_among(new_leaves);
   }
   times_.subdivision += seconds_since(start);
 }

@@ -131,6 +131,12 @@ class Solver {
   void deposit(const Deposit& d, const Rgb& incident, double sign);
   // Splits where the shot made radiosity change fast, and re-shoots into the new leaves (see solver.cpp).
   void substructure(mesh::NodeId shooter, const Rgb& shot_flux);
+  // Its steps: the leaves whose luminance steps too far from a neighbour's, among those this shot reached, then
+  // among the leaves a round of splits made; the splits; the split leaves' share of the shot taken back.
+  std::vector<mesh::NodeId> steep_leaves_of_shot();
+  std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves) const;
+  std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
+  std::vector<mesh::NodeId> take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new);
   double largest_reflected_luminance() const;
   // |dB| per channel: with the patch's area, what chooses the shooter and what the unshot fraction sums.
   Rgb unshot_magnitude(mesh::NodeId patch) const;
