@@ -5,6 +5,7 @@
 #include "core/math.h"
 #include "core/polygon.h"
 #include "formfactor/backend.h"
+#include "formfactor/hemicube_geometry.h"
 #include "formfactor/receiver_view.h"
 
 #include <cmath>
@@ -105,6 +106,18 @@ inline double howell_b2(double a, double b, double c) {
 inline double howell_disk(double a, double h, double r) {
   const double R = r / a, H = h / a;
   return 0.5 * (1 - (H * H + R * R - 1) / std::sqrt((1 + H * H + R * R) * (1 + H * H + R * R) - 4 * R * R));
+}
+
+// The inverse of to_face: local coordinates (u, v, w) of a point given in face coordinates (a, l1, l2).
+inline Vec3 from_face(HemicubeFace face, const Vec3& q) {
+  switch (face) {
+    case HemicubeFace::kTop: return {q.y, q.z, q.x};
+    case HemicubeFace::kPosU: return {q.x, q.y, q.z};
+    case HemicubeFace::kNegU: return {-q.x, q.y, q.z};
+    case HemicubeFace::kPosV: return {q.y, q.x, q.z};
+    case HemicubeFace::kNegV: return {q.y, -q.x, q.z};
+  }
+  return q;
 }
 
 inline double relative_error(double value, double reference) { return std::abs(value - reference) / std::abs(reference); }

@@ -157,16 +157,7 @@ TEST(HemicubeAccuracy, TiltedRectangleReallyCrossesAFaceSeam) {
     const std::size_t m = clip_to_face(local, face, any, scratch, clipped);
     if (m == 0) continue;
     Polygon piece;  // back from face coordinates (a, l1, l2) to local (u, v, w)
-    for (std::size_t k = 0; k < m; ++k) {
-      const Vec3& q = clipped[k];
-      switch (face) {
-        case HemicubeFace::kTop: piece.push_back({q.y, q.z, q.x}); break;
-        case HemicubeFace::kPosU: piece.push_back({q.x, q.y, q.z}); break;
-        case HemicubeFace::kNegU: piece.push_back({-q.x, q.y, q.z}); break;
-        case HemicubeFace::kPosV: piece.push_back({q.y, q.x, q.z}); break;
-        case HemicubeFace::kNegV: piece.push_back({q.y, -q.x, q.z}); break;
-      }
-    }
+    for (std::size_t k = 0; k < m; ++k) piece.push_back(from_face(face, clipped[k]));
     const double share = polygon_form_factor(Vec3(0), Vec3(0, 0, 1), piece);
     total += share;
     std::printf("tilted rectangle: face %d piece of %zu vertices, form factor %.6f of %.6f\n", f, m, share, c.reference);

@@ -206,17 +206,8 @@ std::vector<Polygon> clip_to_all_faces(const Polygon& local) {
   for (int f = 0; f < kHemicubeFaces; ++f) {
     const auto face = static_cast<HemicubeFace>(f);
     const std::size_t m = clip_to_face(local, face, any, scratch, out);
-    Polygon piece;
-    for (std::size_t k = 0; k < m; ++k) {
-      const Vec3& q = out[k];  // (a, l1, l2) back to (u, v, w)
-      switch (face) {
-        case HemicubeFace::kTop: piece.push_back({q.y, q.z, q.x}); break;
-        case HemicubeFace::kPosU: piece.push_back({q.x, q.y, q.z}); break;
-        case HemicubeFace::kNegU: piece.push_back({-q.x, q.y, q.z}); break;
-        case HemicubeFace::kPosV: piece.push_back({q.y, q.x, q.z}); break;
-        case HemicubeFace::kNegV: piece.push_back({q.y, -q.x, q.z}); break;
-      }
-    }
+    Polygon piece;  // (a, l1, l2) back to (u, v, w)
+    for (std::size_t k = 0; k < m; ++k) piece.push_back(testing::from_face(face, out[k]));
     if (!piece.empty()) pieces.push_back(piece);
   }
   return pieces;
