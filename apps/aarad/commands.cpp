@@ -69,9 +69,8 @@ CLI::Validator whole_number_in(long long low, long long high) {
       high == kNoLimit ? ">= " + std::to_string(low) : "in [" + std::to_string(low) + ", " + std::to_string(high) + "]";
   return CLI::Validator(
       [=](std::string& text) -> std::string {
-        std::size_t digits = text.empty() || (text[0] != '-' && text[0] != '+') ? 0 : 1;
-        const bool whole = digits < text.size() &&
-                           text.find_first_not_of("0123456789", digits) == std::string::npos;
+        const std::size_t sign = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+        const bool whole = sign < text.size() && text.find_first_not_of("0123456789", sign) == std::string::npos;
         errno = 0;
         const long long value = whole ? std::strtoll(text.c_str(), nullptr, 10) : 0;
         if (whole && errno == 0 && value >= low && value <= high) return {};
