@@ -20,11 +20,19 @@ namespace aarad::refine {
 
 ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) {
   const mesh::Hierarchy& hierarchy = solver.hierarchy();
+  const Scene& scene = solver.scene();
   std::vector<Rgb> values;
   std::vector<double> areas;
-  for (mesh::NodeId leaf : hierarchy.leaves()) {
-    values.push_back(displayed[leaf]);
-    areas.push_back(hierarchy.area(leaf));
+  // Emitters clip to white: a lamp of a few percent of the area, often 10-100x brighter than what it lights,
+  // would otherwise set the exposure and leave the lit surfaces dark. Only when every surface emits (the furnace)
+  // do the emitters set it.
+  for (const bool emitters : {false, true}) {
+    for (mesh::NodeId leaf : hierarchy.leaves()) {
+      if (!emitters && scene.material_of_surface(hierarchy.surface(leaf)).emission.max_component() > 0.0) continue;
+      values.push_back(displayed[leaf]);
+      areas.push_back(hierarchy.area(leaf));
+    }
+    if (!values.empty()) break;
   }
   return ToneMap::from_percentile(values, areas, 0.99);
 }

@@ -56,6 +56,7 @@ nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violati
       {"emitted_flux", rgb_json(solver.emitted_flux())},
       {"absorbed_flux", rgb_json(solver.absorbed_flux())},
       {"unshot_flux", rgb_json(solver.unshot_flux())},
+      {"escaped_flux", rgb_json(solver.escaped_flux())},
       {"ambient", rgb_json(solver.ambient())},
       {"patches", hierarchy.patches().size()},
       {"elements", hierarchy.leaf_count()},

@@ -175,6 +175,41 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   EXPECT_FALSE(fs::exists(dir / "dark"));
 }
 
+// A lamp over a floor: turned towards the floor, most of its light still leaves the open scene, and the summary
+// and the report say how much; turned away (the vertices in the other order), none reaches a surface, and a
+// warning says so even with --quiet.
+TEST(Cli, SolveSaysHowMuchLightLeavesAnOpenSceneAndWarnsWhenNoneLands) {
+  const fs::path dir = work_dir();
+  write_file("lamp.mtl", "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 5 5 5\n");
+  const std::string floor_and_lamp = "mtllib lamp.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\n"
+                                     "v 0.4 0.5 0.4\nv 0.6 0.5 0.4\nv 0.6 0.5 0.6\nv 0.4 0.5 0.6\n"
+                                     "o floor\nusemtl white\nf 1 4 3 2\no lamp\nusemtl lamp\n";
+  const fs::path down = write_file("lamp_down.obj", floor_and_lamp + "f 5 6 7 8\n");
+  const fs::path up = write_file("lamp_up.obj", floor_and_lamp + "f 5 8 7 6\n");
+
+  ProgramRun r = aarad("solve " + down.string() + " --json --out " + (dir / "down").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  for (int c = 0; c < 3; ++c) {
+    const double emitted = report["emitted_flux"][c].get<double>();
+    const double escaped = report["escaped_flux"][c].get<double>();
+    EXPECT_NEAR(emitted, 0.2, 1e-12);
+    EXPECT_NEAR(escaped, emitted - report["absorbed_flux"][c].get<double>() - report["unshot_flux"][c].get<double>(),
+                1e-12);
+    // The lamp's light that misses the floor (about 1 - 0.55, the point factor from the lamp's centre) and
+    // most of what the floor reflects.
+    EXPECT_GT(escaped, 0.4 * emitted);
+    EXPECT_LT(escaped, 0.9 * emitted);
+  }
+  EXPECT_NE(r.err.find("% of the emitted flux left the scene"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+
+  r = aarad("solve " + up.string() + " --quiet --out " + (dir / "up").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: none of the light shot reached a surface"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
 TEST(Cli, TheObjCopyOfTheCornellBoxSolvesAsTheBuiltIn) {
   const fs::path dir = work_dir();
   const std::string obj = std::string(AARAD_SOURCE_DIR) + "/data/scenes/cornell.obj";

@@ -10,6 +10,7 @@
 #include "refine/output.h"
 #include "refine/report.h"
 #include "refine/solver.h"
+#include "tests/solver_test_scenes.h"
 
 #include <OpenImageIO/imageio.h>
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -185,6 +186,38 @@ TEST(OutputsToneMap, PercentileExposureAndSrgbEncoding) {
   EXPECT_EQ(map(Rgb(0.0))[0], 0);
   // sRGB (IEC 61966-2-1): linear 0.18 encodes to 0.4614, 118 of 255 (0.09 x exposure 2).
   EXPECT_EQ(map(Rgb(0.09))[0], 118);
+}
+
+// The exposure comes from the surfaces that do not emit: the lamp clips to white instead of darkening what it
+// lights. Two unit squares (one emits 1, the other reflects what it gets, about 0.12), one element each.
+TEST(OutputsToneMap, EmittersDoNotSetTheExposure) {
+  SolverOptions options;
+  options.backend = "analytic";
+  options.adaptive = false;
+  options.converge = 1e-12;
+  options.meshing.patch_size = 10.0;
+  options.meshing.element_size = 10.0;
+  Scene scene = test::two_unit_squares();
+  {
+    Solver solver(scene, options);
+    solver.run();
+    const std::vector<Rgb> displayed = solver.displayed_radiosity();
+    ASSERT_EQ(solver.hierarchy().leaf_count(), 2u);
+    mesh::NodeId receiver = solver.hierarchy().leaves()[0];
+    if (scene.material_of_surface(solver.hierarchy().surface(receiver)).emission.r > 0.0)
+      receiver = solver.hierarchy().leaves()[1];
+    EXPECT_NEAR(displayed[receiver].r, 0.1205, 1e-3);  // 0.5 F B_1, F = 0.2394565 (references.md)
+    EXPECT_DOUBLE_EQ(solution_tone_map(solver, displayed).exposure, 1.0 / displayed[receiver].r);
+  }
+  // When every surface emits, the emitters set it: the brighter square, half the area, is the 99th percentile.
+  scene.materials[1].emission = Rgb(2.0);
+  Solver solver(scene, options);
+  solver.run();
+  const std::vector<Rgb> displayed = solver.displayed_radiosity();
+  const double brightest = std::max(displayed[solver.hierarchy().leaves()[0]].r,
+                                    displayed[solver.hierarchy().leaves()[1]].r);
+  EXPECT_GT(brightest, 2.0);
+  EXPECT_DOUBLE_EQ(solution_tone_map(solver, displayed).exposure, 1.0 / brightest);
 }
 
 }  // namespace

@@ -62,8 +62,13 @@ TEST(SolverAnalytic, TwoUnitSquaresFromTheCentroidUseThePointFactor) {
   solver.run();
   const double f = 0.2394565;
   const double b1 = 1.0 / (1.0 - 0.25 * f * f);
+  const double b2 = 0.5 * f * b1;
   EXPECT_NEAR(leaf_radiosity_of_group(solver, "emitter").r, b1, 1e-6);
-  EXPECT_NEAR(leaf_radiosity_of_group(solver, "receiver").r, 0.5 * f * b1, 1e-6);
+  EXPECT_NEAR(leaf_radiosity_of_group(solver, "receiver").r, b2, 1e-6);
+  // The scene is open: each square shoots all of its B (area 1), and the part 1 - F that misses the other
+  // square leaves the scene.
+  const Rgb escaped = solver.escaped_flux();
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(escaped[c], (b1 + b2) * (1.0 - f), 1e-6) << "channel " << c;
 }
 
 // references.md: B_floor = 1.09090910, B_ceiling = 0.18174583, B_wall = 0.18183627. Walls meet the floor at an
@@ -117,6 +122,7 @@ void expect_energy_balance(const Solver& solver) {
   }
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(absorbed[c] + unshot[c], emitted[c], 1e-9 * emitted[c]) << "channel " << c;
+    EXPECT_NEAR(solver.escaped_flux()[c], 0.0, 1e-9 * emitted[c]) << "channel " << c;
     EXPECT_NEAR(balance[c] + unshot[c], emitted[c], 1e-3 * emitted[c]) << "channel " << c;
   }
 }

@@ -168,6 +168,17 @@ void run_solve(SolveCommandOptions options) {
                    static_cast<long long>(solver.shots()));
     }
 
+    // Flux shot past every receiver. All of it, with shots made, is nearly always a scene whose emitters face
+    // away from everything (faces are one-sided): a warning. A part of it is an open scene: the summary says how much.
+    const double shot_flux = (solver.emitted_flux() - solver.unshot_flux()).sum();
+    const double escaped = solver.escaped_flux().sum();
+    if (shot_flux > 0.0 && escaped >= 0.999 * shot_flux) {
+      std::fprintf(stderr,
+                   "aarad: warning: none of the light shot reached a surface: do the emitters face the scene? A face "
+                   "emits and receives on its front side only, the side from which its vertices run "
+                   "counter-clockwise\n");
+    }
+
     const std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
     for (const mesh::Violation& v : violations) {
       std::fprintf(stderr, "aarad: warning: invariant %s violated: %s\n", v.invariant.c_str(), v.message.c_str());
@@ -187,6 +198,11 @@ void run_solve(SolveCommandOptions options) {
       std::fprintf(summary, "aarad: %s after %lld shots (unshot %.3f %%), %zu elements, max level %d, %.2f s\n",
                    state, static_cast<long long>(solver.shots()), 100.0 * solver.unshot_fraction(),
                    solver.hierarchy().leaf_count(), solver.max_leaf_level(), total);
+      const double emitted = solver.emitted_flux().sum();
+      if (escaped > 0.01 * emitted) {
+        std::fprintf(summary, "aarad: %.1f %% of the emitted flux left the scene (an open scene, or faces turned away)\n",
+                     100.0 * escaped / emitted);
+      }
       std::fprintf(summary,
                    "aarad: wrote %s/: mesh.ply flat.png smooth.png mesh.png radiosity.exr report.json\n",
                    out.string().c_str());
