@@ -133,6 +133,20 @@ double Scene::total_area() const {
   return sum;
 }
 
+std::optional<Scene::OcclusionWitness> Scene::occlusion_witness() const {
+  const double tolerance = 1e-6 * diagonal();
+  for (std::uint32_t s = 0; s < surfaces.size(); ++s) {
+    const Plane& plane = surfaces[s].plane;
+    for (const Face& face : faces) {
+      if (face.surface == s) continue;
+      for (const Vec3& v : face.vertices) {
+        if (plane.signed_distance(v) < -tolerance) return OcclusionWitness{s, face.surface};
+      }
+    }
+  }
+  return std::nullopt;
+}
+
 std::optional<std::uint32_t> Scene::find_group(const std::string& group_name) const {
   for (std::uint32_t i = 0; i < groups.size(); ++i)
     if (groups[i].name == group_name) return i;

@@ -101,6 +101,17 @@ class Scene {
   // The group named `group_name`, or nullopt.
   std::optional<std::uint32_t> find_group(const std::string& group_name) const;
 
+  // Whether some surfaces may hide others. They cannot when every surface lies on or in front of the plane of
+  // every other, as the walls of one convex room do: a segment between two points on the boundary of a convex
+  // region meets that boundary only at its ends (or along a plane holding both). Returns a witness, a surface
+  // and another with a vertex behind its plane by more than 1e-6 of the scene's diagonal, or nullopt. Back
+  // ends that ignore visibility (the analytic one) are exact only without a witness.
+  struct OcclusionWitness {
+    std::uint32_t front = 0;   // the surface whose plane...
+    std::uint32_t behind = 0;  // ...has a vertex of this one behind it
+  };
+  std::optional<OcclusionWitness> occlusion_witness() const;
+
   // A camera that frames the scene's bounds from outside, used when the scene has none.
   Camera fitted_camera(double aspect) const;
 };

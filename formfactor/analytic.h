@@ -31,6 +31,7 @@ std::size_t clip_to_front(std::span<const Vec3> local_polygon, std::span<Vec3> o
 class AnalyticBackend final : public FormFactorBackend {
  public:
   std::string_view name() const override { return "analytic"; }
+  bool tests_visibility() const override { return false; }
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
 

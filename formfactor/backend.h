@@ -34,6 +34,9 @@ class FormFactorBackend {
   virtual ~FormFactorBackend() = default;
 
   virtual std::string_view name() const = 0;
+  // Whether compute() lets receivers hide one another; a back end that does not is exact only in scenes where
+  // nothing can (Scene::occlusion_witness).
+  virtual bool tests_visibility() const { return true; }
 
   // For every receiver i in `subset` (all receivers when `subset` is empty), writes to out[i] the form
   // factor from the differential area at shooter.centre with normal shooter.normal to the part of

@@ -3,6 +3,10 @@
 // caller's VertexColour (a tone map), and per-face float properties radiosity_r, radiosity_g, radiosity_b,
 // level, patch (../shared/design.md, "solve --out"). OpenMesh writes persistent custom face properties with
 // IO::Options::Custom.
+// OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back appends a default-constructed colour, whose
+// components VectorT leaves uninitialized until they are set; GCC 12 reports that as -Wmaybe-uninitialized
+// from a system header. Every colour is assigned before the mesh is written.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Core/IO/MeshIO.hh>
 
 #include "mesh/export_ply.h"

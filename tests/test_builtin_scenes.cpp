@@ -10,9 +10,11 @@
 #include "core/obj_import.h"
 #include "core/polygon.h"
 #include "core/predicates.h"
+#include "tests/solver_test_scenes.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -244,6 +246,38 @@ TEST(BuiltinScenes, scene_furnace_is_closed_and_uniform) {
 }
 
 // ---- Office --------------------------------------------------------------------------------------------
+
+// Surfaces may hide one another unless each lies on or in front of every other's plane (one convex room).
+TEST(BuiltinScenes, scene_occlusion_witness_only_where_surfaces_may_hide_others) {
+  EXPECT_FALSE(test::unit_cube().occlusion_witness().has_value());
+  EXPECT_FALSE(test::two_unit_squares().occlusion_witness().has_value());
+  const auto group_name = [](const Scene& scene, std::uint32_t surface) {
+    return scene.groups[scene.surfaces[surface].group].name;
+  };
+  // The furnace's floating blocks face out: the room lies behind their faces.
+  const Scene furnace = make_furnace();
+  const auto witness = furnace.occlusion_witness();
+  ASSERT_TRUE(witness.has_value());
+  EXPECT_EQ(group_name(furnace, witness->front).rfind("block_", 0), 0u) << group_name(furnace, witness->front);
+  double deepest = 0.0;  // the witness holds: a vertex of `behind` lies behind the plane of `front`
+  for (std::uint32_t f : furnace.surfaces[witness->behind].faces)
+    for (const Vec3& v : furnace.faces[f].vertices)
+      deepest = std::min(deepest, furnace.surfaces[witness->front].plane.signed_distance(v));
+  EXPECT_LT(deepest, -1e-6 * furnace.diagonal());
+  // The unit cube with a small quad floating inside it, facing the floor: the ceiling lies behind the quad.
+  Scene cube = test::unit_cube();
+  const auto grey = cube.add_material({"quad", Rgb(0.5), Rgb(0.0)});
+  test::add_facing(cube, cube.add_group("quad"), grey, {{0.4, 0.5, 0.4}, {0.6, 0.5, 0.4}, {0.6, 0.5, 0.6}, {0.4, 0.5, 0.6}},
+                   {0, -1, 0});
+  cube.build_surfaces();
+  const auto inside = cube.occlusion_witness();
+  ASSERT_TRUE(inside.has_value());
+  EXPECT_EQ(group_name(cube, inside->front), "quad");
+  // A dent of a millionth of the diagonal or less is rounding, not a hiding place.
+  Scene flat = test::unit_cube();
+  flat.faces.front().vertices.front().y -= 0.5e-6 * flat.diagonal();
+  EXPECT_FALSE(flat.occlusion_witness().has_value());
+}
 
 TEST(BuiltinScenes, scene_office_room_lights_and_furniture) {
   const Scene scene = make_office();

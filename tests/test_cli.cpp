@@ -284,6 +284,27 @@ TEST(Cli, FormfactorsBetweenCoaxialSquaresMatchHowell) {
   }
 }
 
+// The analytic back end ignores visibility: a warning where surfaces may hide one another (the Cornell box's
+// light hangs below the ceiling), none in an open pair of squares, none from a hemicube.
+TEST(Cli, TheAnalyticBackEndWarnsWhereSurfacesMayHideOneAnother) {
+  const fs::path obj = write_file("pair.obj",
+                                  "o bottom\nv -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3 4\n"
+                                  "o top\nv -0.5 -0.5 1\nv 0.5 -0.5 1\nv 0.5 0.5 1\nv -0.5 0.5 1\nf 5 8 7 6\n");
+  ProgramRun r = aarad("formfactors " + obj.string() + " --from bottom --ff analytic");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("ignores visibility"), std::string::npos) << r.err;
+  r = aarad("formfactors cornell --from floor --ff analytic");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: the analytic back end ignores visibility"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("behind the plane of group"), std::string::npos) << r.err;
+  r = aarad("formfactors cornell --from floor");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("ignores visibility"), std::string::npos) << r.err;
+  r = aarad("solve cornell --ff analytic --max-shots 1 --quiet --out " + (work_dir() / "analytic").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: the analytic back end ignores visibility"), std::string::npos) << r.err;
+}
+
 TEST(Cli, FormfactorsFromTheCornellFloorPointToTheLight) {
   // references.md: the Cornell box floor point (278, 0, 279.5), normal (0, 1, 0), sees the light (its official
   // vertices, facing down) with 0.0142069579. The built-in box's floor is cut around the blocks, so its

@@ -1,5 +1,9 @@
 // Display reconstruction (vertex values, hanging-vertex interpolation, crack-free triangulation) and the PLY
 // export read back by OpenMesh.
+// OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back appends a default-constructed colour, whose
+// components VectorT leaves uninitialized until they are set; GCC 12 reports that as -Wmaybe-uninitialized
+// from a system header. Here every colour is filled by reading a PLY file back.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Core/IO/MeshIO.hh>
 
 #include "core/builtin_scenes.h"

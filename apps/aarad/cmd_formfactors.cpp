@@ -65,6 +65,7 @@ void run_formfactors(const FormFactorsOptions& options) {
   const formfactor::Shooter shooter = shooter_of_group(scene, *from);
   const std::unique_ptr<formfactor::FormFactorBackend> backend =
       formfactor::make_backend(options.method, {.resolution = options.resolution});
+  warn_if_visibility_is_ignored(scene, *backend);
 
   // Every face of every other group is one receiver; a face's patch is itself.
   formfactor::ReceiverView receivers;

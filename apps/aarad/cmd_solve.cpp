@@ -148,6 +148,7 @@ void run_solve(SolveCommandOptions options) {
                 "would be black" +
                 (scene.warnings.empty() ? std::string() : " (see the warnings above)"));
   }
+  warn_if_visibility_is_ignored(scene, solver.backend());
   const bool show_progress = !options.quiet;
   if (show_progress) {
     std::fprintf(stderr, "aarad: %s: %zu patches, %zu elements; %s at resolution %d\n", scene.name.c_str(),

@@ -1,10 +1,14 @@
 #include "apps/aarad/commands.h"
 
+#include "core/scene.h"
+#include "formfactor/backend.h"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace aarad::app {
@@ -77,6 +81,19 @@ CLI::Validator whole_number_in(long long low, long long high) {
         return "Value " + text + " must be a whole number " + wanted;
       },
       wanted);
+}
+
+void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFactorBackend& backend) {
+  if (backend.tests_visibility()) return;
+  const std::optional<Scene::OcclusionWitness> witness = scene.occlusion_witness();
+  if (!witness) return;
+  const auto group_of = [&](std::uint32_t surface) { return scene.groups[scene.surfaces[surface].group].name; };
+  std::fprintf(stderr,
+               "aarad: warning: the %s back end ignores visibility, but in %s surfaces may hide one another (a "
+               "vertex of group '%s' lies behind the plane of group '%s'), so its result has no shadows; it is exact "
+               "only inside one convex room\n",
+               std::string(backend.name()).c_str(), scene.name.c_str(), group_of(witness->behind).c_str(),
+               group_of(witness->front).c_str());
 }
 
 void set_exit_code(int code) { g_exit_code = code; }

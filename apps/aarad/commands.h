@@ -6,6 +6,13 @@
 
 #include <limits>
 
+namespace aarad {
+class Scene;
+namespace formfactor {
+class FormFactorBackend;
+}
+}  // namespace aarad
+
 namespace aarad::app {
 
 void add_commands(CLI::App& app);
@@ -22,6 +29,10 @@ CLI::Validator number_in(double low, End low_end, double high, End high_end);
 // that says a whole number is wanted, instead of CLI11's "not in range" or "could not convert".
 inline constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 CLI::Validator whole_number_in(long long low, long long high = kNoLimit);
+
+// Warns on stderr when `backend` ignores visibility and surfaces of `scene` can hide one another: its result
+// then has no shadows.
+void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFactorBackend& backend);
 
 void set_exit_code(int code);
 int exit_code();
