@@ -19,20 +19,38 @@ void ReceiverView::clear() {
   max_polygon_size_ = 0;
 }
 
+namespace {
+
+// At least n, and at least twice the old capacity when it must grow: the solver rebuilds a view after every
+// round of splits, a little larger each time, and exact reservations would move every array (into memory the
+// kernel must fault in afresh) at every rebuild.
+template <class T>
+void reserve_at_least(std::vector<T>& v, std::size_t n) {
+  if (v.capacity() < n) v.reserve(std::max(n, 2 * v.capacity()));
+}
+
+template <class T>
+void copy_into(std::vector<T>& to, const std::vector<T>& from) {
+  reserve_at_least(to, from.size());
+  to.assign(from.begin(), from.end());
+}
+
+}  // namespace
+
 void ReceiverView::reserve(std::size_t receivers, std::size_t vertices) {
-  vertices_.reserve(vertices);
-  offsets_.reserve(receivers + 1);
-  planes_.reserve(receivers);
-  surfaces_.reserve(receivers);
-  patches_.reserve(receivers);
-  points_.reserve(vertices);
-  corner_points_.reserve(vertices);
+  reserve_at_least(vertices_, vertices);
+  reserve_at_least(offsets_, receivers + 1);
+  reserve_at_least(planes_, receivers);
+  reserve_at_least(surfaces_, receivers);
+  reserve_at_least(patches_, receivers);
+  reserve_at_least(points_, vertices);
+  reserve_at_least(corner_points_, vertices);
 }
 
 void ReceiverView::start_from_points_of(const ReceiverView& other) {
   clear();
-  points_ = other.points_;
-  point_of_key_ = other.point_of_key_;
+  copy_into(points_, other.points_);
+  copy_into(point_of_key_, other.point_of_key_);
 }
 
 void ReceiverView::append_from(const ReceiverView& other, std::uint32_t first, std::uint32_t last) {
