@@ -6,6 +6,7 @@
 #include "mesh/display.h"
 #include "mesh/export_ply.h"
 #include "refine/render.h"
+#include "refine/report.h"
 
 #include <cerrno>
 #include <chrono>
@@ -100,7 +101,7 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
 void write_report(const nlohmann::json& report, const std::filesystem::path& path) {
   write_file_atomically(path, [&](const std::filesystem::path& temporary) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << report.dump(2) << '\n';
+    out << json_text(report, 2) << '\n';
     out.close();
     if (!out) throw Error("cannot write " + path.string());
   });

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <string>
 #include <vector>
 
 namespace aarad::refine {
@@ -20,6 +21,13 @@ struct ReportTimes {
 };
 
 nlohmann::json rgb_json(const Rgb& colour);
+
+// The text of a JSON report, `indent` as nlohmann::json::dump. Names come from the user's files and need not be
+// UTF-8 (a Latin-1 "K\xfcche"): invalid bytes become U+FFFD instead of an exception after the work is done.
+template <class Json>
+std::string json_text(const Json& report, int indent = -1) {
+  return report.dump(indent, ' ', false, Json::error_handler_t::replace);
+}
 
 // `violations` is the result of mesh::check_invariants on the solver's hierarchy after the solve.
 nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violation>& violations,

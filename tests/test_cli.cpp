@@ -210,6 +210,27 @@ TEST(Cli, SolveSaysHowMuchLightLeavesAnOpenSceneAndWarnsWhenNoneLands) {
   EXPECT_TRUE(r.out.empty()) << r.out;
 }
 
+// Names are bytes from the user's file: a Latin-1 group name is not UTF-8, and the JSON reports carry it with a
+// replacement character instead of failing after the solve.
+TEST(Cli, NamesThatAreNotUtf8AreReportedWithReplacementCharacters) {
+  const fs::path dir = work_dir();
+  write_file("kitchen.mtl", "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 5 5 5\n");
+  const fs::path obj = write_file("kitchen.obj", "mtllib kitchen.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\n"
+                                                 "v 0.4 0.5 0.4\nv 0.6 0.5 0.4\nv 0.6 0.5 0.6\nv 0.4 0.5 0.6\n"
+                                                 "o K\xfc" "che\nusemtl white\nf 1 4 3 2\no lamp\nusemtl lamp\nf 5 6 7 8\n");
+  const std::string replaced = "K\xef\xbf\xbd" "che";  // U+FFFD in UTF-8
+  ProgramRun r = aarad("solve " + obj.string() + " --json --quiet --out " + (dir / "kitchen").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["groups"][0]["name"], replaced);
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir / "kitchen" / "report.json"))["groups"][0]["name"], replaced);
+  r = aarad("inspect " + obj.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["groups"][0]["name"], replaced);
+  r = aarad("formfactors " + obj.string() + " --from lamp --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["receivers"][0]["name"], replaced);
+}
+
 TEST(Cli, TheObjCopyOfTheCornellBoxSolvesAsTheBuiltIn) {
   const fs::path dir = work_dir();
   const std::string obj = std::string(AARAD_SOURCE_DIR) + "/data/scenes/cornell.obj";

@@ -4,6 +4,7 @@
 
 #include "core/builtin_scenes.h"
 #include "core/error.h"
+#include "refine/report.h"
 #include "core/polygon.h"
 #include "formfactor/backend.h"
 
@@ -102,7 +103,7 @@ void run_formfactors(const FormFactorsOptions& options) {
         {"seconds", seconds},
         {"receivers", rows},
     };
-    std::cout << report.dump() << '\n';
+    std::cout << refine::json_text(report) << '\n';
     return;
   }
   std::printf("form factors from '%s' of %s\n", options.from.c_str(), scene.name.c_str());

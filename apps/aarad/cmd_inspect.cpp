@@ -4,6 +4,7 @@
 
 #include "core/builtin_scenes.h"
 #include "core/error.h"
+#include "refine/report.h"
 #include "core/scene.h"
 
 #include <CLI/CLI.hpp>
@@ -164,7 +165,7 @@ void add_inspect_command(CLI::App& app) {
     const Scene scene = load_scene(options->scene);
     const bool builtin = is_builtin(options->scene);
     if (options->json) {
-      std::cout << report(scene, builtin).dump(2) << std::endl;
+      std::cout << refine::json_text(report(scene, builtin), 2) << std::endl;
     } else {
       print_table(scene, builtin);
       std::fflush(stdout);

@@ -190,7 +190,7 @@ void run_solve(SolveCommandOptions options) {
     const nlohmann::json report = refine::make_report(solver, violations, {.total = total, .output = files.seconds});
     refine::write_report(report, out / "report.json");
 
-    if (options.json) std::cout << report.dump() << '\n' << std::flush;
+    if (options.json) std::cout << refine::json_text(report) << '\n' << std::flush;
     if (!options.quiet) {
       std::FILE* summary = options.json ? stderr : stdout;
       const char* state = solver.converged()     ? "converged"
