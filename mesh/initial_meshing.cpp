@@ -1,8 +1,9 @@
 // Initial meshing of physical surfaces into patches and elements.
 // Substructuring after Cohen, Greenberg, Immel and Brock 1986 ("An efficient radiosity approach for
-// realistic image synthesis", section 3): patches are the shooters, elements the receivers. Surfaces that are
-// not one convex quadrilateral are triangulated with CGAL's constrained Delaunay mesher (Shewchuk's / Ruppert's
-// refinement, CGAL 2D Conforming Triangulations and Meshes, Delaunay_mesher_2).
+// realistic image synthesis", section 3): patches are the shooters, elements the receivers. A surface that is
+// one convex quadrilateral or one triangle (one face, or faces tiling one) gets a grid of patches; others are
+// triangulated with CGAL's constrained Delaunay mesher (Shewchuk's / Ruppert's refinement, CGAL 2D Conforming
+// Triangulations and Meshes, Delaunay_mesher_2).
 #include "mesh/initial_meshing.h"
 
 #include "core/error.h"
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -113,6 +115,51 @@ SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, doub
       out.elements.push_back(std::move(elements));
     }
   return out;
+}
+
+// The outline of a surface whose faces tile one convex polygon, as exporters write a quad as two triangles or
+// a fan: an edge two faces share (once each way) cancels, and what is left must be one loop, of the faces' total
+// area, that is a triangle or a strictly convex quadrilateral once points exactly on a straight run (exact
+// orientation in the surface's plane) are dropped. Such a surface is meshed as that one polygon; every other
+// shape returns nullopt and goes to the Delaunay mesher, whose constraints along every face edge and minimum
+// angle would cut a two-triangle square into several times as many patches.
+std::optional<std::vector<Vec3>> convex_outline(const Scene& scene, const Surface& surface, const Frame& frame) {
+  using Key = std::array<double, 3>;
+  const auto key = [](const Vec3& p) { return Key{p.x, p.y, p.z}; };
+  std::map<std::pair<Key, Key>, std::pair<Vec3, Vec3>> edges;  // directed edges not (yet) cancelled
+  double faces_area = 0.0;
+  for (const std::uint32_t fi : surface.faces) {
+    const std::vector<Vec3>& face = scene.faces[fi].vertices;
+    faces_area += aarad::area(face);
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      const Vec3& a = face[i];
+      const Vec3& b = face[(i + 1) % face.size()];
+      if (edges.erase({key(b), key(a)}) != 0) continue;               // shared with a face before: inside
+      if (!edges.try_emplace({key(a), key(b)}, a, b).second) return std::nullopt;  // two faces overlap
+    }
+  }
+  std::map<Key, Vec3> next;  // each loop vertex to the next one
+  for (const auto& [ends, points] : edges)
+    if (!next.try_emplace(ends.first, points.second).second) return std::nullopt;  // not one simple loop
+  if (next.size() < 3) return std::nullopt;
+  std::vector<Vec3> loop{edges.begin()->second.first};
+  while (loop.size() <= next.size()) {
+    const auto following = next.find(key(loop.back()));
+    if (following == next.end()) return std::nullopt;  // an open chain
+    if (key(following->second) == key(loop.front())) break;
+    loop.push_back(following->second);
+  }
+  if (loop.size() != next.size()) return std::nullopt;  // more than one loop
+  std::vector<Vec3> corners;
+  for (std::size_t i = 0; i < loop.size(); ++i) {
+    const Vec2 before = frame.to_2d(loop[(i + loop.size() - 1) % loop.size()]);
+    const Vec2 here = frame.to_2d(loop[i]);
+    const Vec2 after = frame.to_2d(loop[(i + 1) % loop.size()]);
+    if (orientation(before, here, after) != Sign::kZero) corners.push_back(loop[i]);
+  }
+  if (!(std::abs(aarad::area(corners) - faces_area) <= 1e-9 * faces_area)) return std::nullopt;
+  if (corners.size() == 3 || strictly_convex_quad(corners, frame)) return corners;
+  return std::nullopt;
 }
 
 // Crossing-number test of a point against a simple polygon (2D); points on the boundary may go either way,
@@ -289,12 +336,14 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
                             double max_elements, double scene_limit) {
   const Surface& surface = scene.surfaces.at(surface_id);
   const Budget budget{scene, surface, max_elements, scene_limit};
-  if (surface.faces.size() == 1) {
-    const std::vector<Vec3>& polygon = scene.faces[surface.faces.front()].vertices;
-    if (strictly_convex_quad(polygon, frame_of(surface.plane, polygon.front())))
-      return mesh_convex_quad(polygon, patch_size, element_size, budget);
-    if (polygon.size() == 3 && aarad::area(polygon) > 0.0)
-      return mesh_triangle(polygon, patch_size, element_size, budget);
+  const std::vector<Vec3>& first = scene.faces[surface.faces.front()].vertices;
+  const Frame frame = frame_of(surface.plane, first.front());
+  const std::optional<std::vector<Vec3>> outline =
+      surface.faces.size() == 1 ? std::optional<std::vector<Vec3>>(first) : convex_outline(scene, surface, frame);
+  if (outline) {
+    if (strictly_convex_quad(*outline, frame)) return mesh_convex_quad(*outline, patch_size, element_size, budget);
+    if (outline->size() == 3 && aarad::area(*outline) > 0.0)
+      return mesh_triangle(*outline, patch_size, element_size, budget);
   }
   return mesh_general(scene, surface, patch_size, element_size, budget);
 }

@@ -99,6 +99,54 @@ TEST(Hierarchy, ConvexQuadBecomesABilinearGridOfQuads) {
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
 }
 
+// A scene of one group whose faces (counter-clockwise seen from +z, in z = 0) make one surface.
+Scene faces_scene(const std::vector<std::vector<Vec2>>& faces) {
+  Scene scene;
+  scene.name = "faces";
+  const std::uint32_t material = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("faces");
+  for (const auto& face : faces) {
+    std::vector<Vec3> vertices;
+    for (const Vec2& p : face) vertices.emplace_back(p.x, p.y, 0.0);
+    scene.add_face(group, material, vertices);
+  }
+  scene.build_surfaces();
+  return scene;
+}
+
+// Exporters write a quad as two triangles or a fan: faces that tile one convex quadrilateral (or triangle) are
+// meshed as that polygon, with the patches of the one-face quad, not as a Delaunay mesh constrained along the
+// diagonals.
+TEST(Hierarchy, FacesTilingOneConvexPolygonAreMeshedAsThatPolygon) {
+  const Hierarchy quad(test::square_scene(), sizes(0.2, 0.1));
+  ASSERT_EQ(quad.patches().size(), 25u);
+  const std::vector<std::vector<std::vector<Vec2>>> tilings{
+      {{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 1}, {0, 1}}},                        // two triangles
+      {{{0, 0}, {1, 0}, {0.5, 0.5}}, {{1, 0}, {1, 1}, {0.5, 0.5}},                 // a fan around the centre
+       {{1, 1}, {0, 1}, {0.5, 0.5}}, {{0, 1}, {0, 0}, {0.5, 0.5}}},
+      {{{0, 0}, {0.5, 0}, {0.5, 1}, {0, 1}}, {{0.5, 0}, {1, 0}, {1, 1}, {0.5, 1}}}};  // two halves: midpoints dropped
+  for (std::size_t t = 0; t < tilings.size(); ++t) {
+    const Hierarchy h(faces_scene(tilings[t]), sizes(0.2, 0.1));
+    EXPECT_EQ(h.patches().size(), 25u) << "tiling " << t;
+    EXPECT_EQ(h.leaf_count(), quad.leaf_count()) << "tiling " << t;
+    for (NodeId p : h.patches()) EXPECT_EQ(h.corner_count(p), 4) << "tiling " << t;
+    EXPECT_NEAR(total_leaf_area(h), 1.0, 1e-14) << "tiling " << t;
+    EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  }
+  // Two triangles of one triangle (split at a midpoint of its hypotenuse): the triangle's grid.
+  const Hierarchy triangle(test::triangle_scene(), sizes(0.3, 0.15));
+  const Hierarchy halves(faces_scene({{{0, 0}, {1, 0}, {0.5, 0.5}}, {{0, 0}, {0.5, 0.5}, {0, 1}}}), sizes(0.3, 0.15));
+  EXPECT_EQ(halves.patches().size(), triangle.patches().size());
+  EXPECT_EQ(halves.leaf_count(), triangle.leaf_count());
+  // Not one convex polygon: an L of two rectangles, and a square whose two triangles overlap; both go to the
+  // Delaunay mesher and keep their area.
+  const Hierarchy l(faces_scene({{{0, 0}, {2, 0}, {2, 1}, {0, 1}}, {{0, 1}, {1, 1}, {1, 2}, {0, 2}}}), sizes(0.6, 0.3));
+  EXPECT_NEAR(total_leaf_area(l), 3.0, 1e-12);
+  for (NodeId n : l.leaves()) EXPECT_EQ(l.corner_count(n), 3);
+  const Hierarchy overlap(faces_scene({{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 0}, {1, 1}}}), sizes(0.2, 0.1));
+  for (NodeId n : overlap.leaves()) EXPECT_EQ(overlap.corner_count(n), 3);
+}
+
 TEST(Hierarchy, PatchNotCutFurtherStillHasOneElementChild) {
   const Hierarchy h(test::square_scene(), sizes(1.0, 1.0));
   ASSERT_EQ(h.patches().size(), 1u);
