@@ -23,9 +23,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 namespace aarad {
 namespace {
@@ -44,6 +46,51 @@ std::vector<std::string> split_tokens(const std::string& line) {
   while (in >> t) tokens.push_back(t);
   return tokens;
 }
+
+// The text of an OBJ or MTL file as both readers here see it: without a UTF-8 byte-order mark (Notepad writes
+// one, and it would hide the first statement, often the mtllib or newmtl line) and without a comment after a
+// statement ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would take for part of the statement.
+// Whole-line comments stay (the "# aarad" lines are read from them), and every line keeps its number.
+std::string clean_text(std::istream& in) {
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
+  std::string out;
+  out.reserve(text.size() + 1);
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    const auto first = line.find_first_not_of(" \t");
+    if (first != std::string::npos && line[first] != '#') {
+      for (std::size_t i = first + 1; i < line.size(); ++i) {
+        if (line[i] == '#' && (line[i - 1] == ' ' || line[i - 1] == '\t')) {
+          line.erase(i);
+          break;
+        }
+      }
+    }
+    out += line;
+    out += '\n';
+  }
+  return out;
+}
+
+// tinyobjloader's material reader for cleaned MTL text, found as tinyobjloader finds it: relative to the OBJ's
+// folder. A library that cannot be read is skipped (import_obj warns about it by name).
+class CleanMaterialReader final : public tinyobj::MaterialReader {
+ public:
+  explicit CleanMaterialReader(fs::path folder) : folder_(std::move(folder)) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* material_map, std::string* warnings, std::string* errors) override {
+    std::ifstream in(folder_ / name);
+    if (!in) return false;
+    std::istringstream text(clean_text(in));
+    tinyobj::LoadMtl(material_map, materials, &text, warnings, errors);
+    return true;
+  }
+
+ private:
+  fs::path folder_;
+};
 
 std::string trim(const std::string& s) {
   const auto first = s.find_first_not_of(" \t\r\n");
@@ -219,7 +266,8 @@ Rgb parse_colour(const std::string& path, int line, const std::vector<std::strin
 }
 
 void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& entries) {
-  std::ifstream in(path);
+  std::ifstream file(path);
+  std::istringstream in(clean_text(file));
   std::string line;
   int number = 0;
   MtlEntry* current = nullptr;
@@ -391,8 +439,11 @@ Scene import_obj(const std::string& obj_path) {
     throw InputError(obj_path, 0, "no such file; check the path (built-in scenes are named without a path: cornell, "
                                   "office, furnace)");
   if (!fs::is_regular_file(obj_path, ec)) throw InputError(obj_path, 0, "not a regular file; give the path of an OBJ file");
-  std::ifstream in(obj_path);
-  if (!in) throw InputError(obj_path, 0, std::string("cannot read the file (") + std::strerror(errno) + "); check its permissions");
+  std::ifstream obj_file(obj_path);
+  if (!obj_file)
+    throw InputError(obj_path, 0, std::string("cannot read the file (") + std::strerror(errno) + "); check its permissions");
+  const std::string cleaned = clean_text(obj_file);
+  std::istringstream in(cleaned);
 
   Scene scene;
   scene.name = obj_path;
@@ -423,9 +474,10 @@ Scene import_obj(const std::string& obj_path) {
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> parsed_materials;
   std::string tiny_warnings, tiny_errors;
-  const std::string base = folder.empty() ? std::string("./") : folder.string() + "/";
-  const bool ok = tinyobj::LoadObj(&attrib, &shapes, &parsed_materials, &tiny_warnings, &tiny_errors,
-                                   obj_path.c_str(), base.c_str(), /*triangulate=*/false);
+  std::istringstream obj_text(cleaned);
+  CleanMaterialReader material_reader(folder.empty() ? fs::path(".") : folder);
+  const bool ok = tinyobj::LoadObj(&attrib, &shapes, &parsed_materials, &tiny_warnings, &tiny_errors, &obj_text,
+                                   &material_reader, /*triangulate=*/false);
   if (!ok) throw InputError(obj_path, 0, "cannot parse the OBJ file: " + trim(tiny_errors));
 
   // Materials, checked against the MTL text (which knows the lines).

@@ -340,6 +340,27 @@ TEST_F(SceneImport, import_materials_and_emitters) {
   EXPECT_DOUBLE_EQ(scene.diagonal(), std::sqrt(6.0));
 }
 
+// Notepad starts files with a UTF-8 byte-order mark, and OBJ allows a comment after a statement: neither may
+// hide a statement (here the first line of each file, mtllib and newmtl) nor break a face line.
+TEST_F(SceneImport, import_byte_order_marks_and_trailing_comments_are_read_as_text) {
+  const std::string bom = "\xEF\xBB\xBF";
+  write("s.mtl", bom + kSquareMtl);
+  const std::string obj = write("lit.obj",
+                                bom + "mtllib s.mtl # the materials\n"
+                                "v 0 0 0 # origin\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "v 0 0 2\nv 0 1 2\nv 1 1 2\nv 1 0 2\n"
+                                "g floor # ground\nusemtl grey\nf 1 2 3 4 # floor quad\n"
+                                "g light\nusemtl lamp\t# the lamp\nf 5 6 7 8\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+  ASSERT_EQ(scene.groups.size(), 2u);
+  EXPECT_EQ(scene.groups[0].name, "floor");
+  const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
+  EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));
+  EXPECT_EQ(scene.materials[light.material].reflectance, Rgb(0.2));
+  EXPECT_DOUBLE_EQ(scene.total_area(), 2.0);
+}
+
 TEST_F(SceneImport, import_camera_comment_is_read_back) {
   const std::string obj = write("cam.obj",
                                 "# aarad camera: eye 1 2 3 forward 0 0 2 up 0 1 0 vertical_fov 0.5\n"
