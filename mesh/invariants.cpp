@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <sstream>
 
 namespace aarad::mesh {
@@ -21,11 +22,31 @@ using FaceHandle = LeafMesh::FaceHandle;
 constexpr double kAreaTolerance = 1e-12;       // children areas sum to the parent's, relative
 constexpr double kLengthTolerance = 1e-9;      // positions, relative to the scene diagonal
 constexpr double kRadiosityTolerance = 1e-9;   // area-weighted mean, relative to the radiosity
+// A point computed from the scene's coordinates (a midpoint, a grid point) is only known to a few units in the
+// last place of the largest coordinate: 16 of them. Far from the origin (a building in georeferenced metres,
+// 1e6 away) that exceeds the tolerances above, and bounds them from below.
+constexpr double kPositionUlps = 16.0;
 
 class Checker {
  public:
   explicit Checker(const Hierarchy& h) : h_(h), m_(h.impl()), mesh_(m_.mesh) {
-    length_tolerance_ = kLengthTolerance * m_.scene.diagonal();
+    double largest = 0.0;
+    for (const Face& face : m_.scene.faces)
+      for (const Vec3& p : face.vertices) largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    position_error_ = kPositionUlps * std::numeric_limits<double>::epsilon() * largest;
+    length_tolerance_ = std::max(kLengthTolerance * m_.scene.diagonal(), position_error_);
+  }
+
+  static double perimeter(std::span<const Vec3> corners) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < corners.size(); ++i) sum += glm::length(corners[(i + 1) % corners.size()] - corners[i]);
+    return sum;
+  }
+
+  // How far computed areas may be from one another: kAreaTolerance relative, or what moving the corners of the
+  // polygons involved by the position error changes (at most their perimeters times that error).
+  double area_tolerance(double area, double perimeters) const {
+    return std::max(kAreaTolerance * area, perimeters * position_error_);
   }
 
   std::vector<Violation> run() {
@@ -307,20 +328,22 @@ class Checker {
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
       h_.corners(n, parent_corners);
       const double stored = m_.area[n], actual = aarad::area(parent_corners);
-      if (std::abs(stored - actual) > kAreaTolerance * actual)
+      const double parent_perimeter = perimeter(parent_corners);
+      if (std::abs(stored - actual) > area_tolerance(actual, parent_perimeter))
         report("children-tile-parent", n, "node ", n, " stores area ", stored, " but its corners span ", actual);
       const auto children = h_.children(n);
       if (children.empty()) continue;
       const Plane plane = plane_of(parent_corners);
       parent_2d.resize(parent_corners.size());
       project_to_2d(parent_corners, plane.normal, parent_2d);
-      double sum = 0.0;
+      double sum = 0.0, perimeters = parent_perimeter;
       children_2d.clear();
       child_nodes.clear();
       for (NodeId c : children) {
         if (!valid_node(c)) continue;
         h_.corners(c, child_corners);
         sum += aarad::area(child_corners);
+        perimeters += perimeter(child_corners);
         if (glm::dot(vector_area(child_corners), plane.normal) <= 0.0)
           report("children-tile-parent", c, "child ", c, " of node ", n, " is not counter-clockwise like its parent");
         for (const Vec3& p : child_corners)
@@ -334,7 +357,7 @@ class Checker {
           if (outside(parent_2d, p))
             report("children-tile-parent", c, "a corner of child ", c, " lies outside node ", n);
       }
-      if (std::abs(sum - m_.area[n]) > kAreaTolerance * m_.area[n])
+      if (std::abs(sum - m_.area[n]) > area_tolerance(m_.area[n], perimeters))
         report("children-tile-parent", n, "children of node ", n, " cover ", sum, " of its area ", m_.area[n],
                " (relative ", (sum - m_.area[n]) / m_.area[n], ")");
       check_children_disjoint(n, child_nodes, children_2d);
@@ -403,29 +426,37 @@ class Checker {
     return !separated_by_edges_of(a, b) && !separated_by_edges_of(b, a);
   }
 
-  // Every inner node's B is the area-weighted mean of the B of the leaves below it.
+  // Every inner node's B is the area-weighted mean of the B of the leaves below it. The hierarchy weighs an
+  // inner child by its stored area, which may differ from the sum of its leaves' areas by the position error
+  // (check_tiling); `slack` bounds what those differences below a node move its mean, relative to the largest
+  // |B| of its leaves (`peak`).
   void check_radiosity() {
     const std::size_t count = m_.parent.size();
     std::vector<Rgb> weighted(count);
-    std::vector<double> area(count, 0.0);
+    std::vector<double> area(count, 0.0), slack(count, 0.0), peak(count, 0.0);
     for (std::size_t i = count; i-- > 0;) {  // children have larger ids than their parent
       const auto n = static_cast<NodeId>(i);
+      double weight_error = 0.0;  // of n as its parent's child: |stored area - its leaves' area|, relative
       if (h_.is_leaf(n)) {
         weighted[n] = m_.radiosity[n] * m_.area[n];
         area[n] = m_.area[n];
+        peak[n] = std::max({std::abs(m_.radiosity[n].r), std::abs(m_.radiosity[n].g), std::abs(m_.radiosity[n].b)});
       } else {
         const Rgb mean = weighted[n] / area[n];
         const Rgb& b = m_.radiosity[n];
         for (int ch = 0; ch < 3; ++ch) {
           const double scale = std::max(std::abs(b[ch]), std::abs(mean[ch]));
-          if (std::abs(b[ch] - mean[ch]) > kRadiosityTolerance * scale)
+          if (std::abs(b[ch] - mean[ch]) > kRadiosityTolerance * scale + 2.0 * slack[n] * peak[n])
             report("radiosity-mean", n, "node ", n, " has B[", ch, "] = ", b[ch], " but its leaves average ", mean[ch]);
         }
+        weight_error = std::abs(m_.area[n] - area[n]) / area[n];
       }
       const NodeId p = m_.parent[n];
       if (p != kNoNode && valid_node(p) && p < n) {
         weighted[p] += weighted[n];
         area[p] += area[n];
+        slack[p] = std::max(slack[p], slack[n] + weight_error);
+        peak[p] = std::max(peak[p], peak[n]);
       }
     }
   }
@@ -434,6 +465,7 @@ class Checker {
   const Hierarchy::Impl& m_;
   const LeafMesh& mesh_;
   double length_tolerance_ = 0.0;
+  double position_error_ = 0.0;
   std::vector<Violation> violations_;
   // Scratch of check_tiling: the 2D bounding box of every child of one node, and their sweep order.
   struct Box {

@@ -231,6 +231,29 @@ TEST(Cli, NamesThatAreNotUtf8AreReportedWithReplacementCharacters) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["receivers"][0]["name"], replaced);
 }
 
+// The Cornell box's sizes (140 mm patches, 70 mm elements, 60 mm^2) go together: a patch size on the command
+// line replaces them, and the rest take the defaults --help states (half the patch size, 1e-7 d^2).
+TEST(Cli, APatchSizeOnTheCommandLineReplacesTheScenesSizes) {
+  const fs::path dir = work_dir();
+  ProgramRun r = aarad("solve cornell --max-shots 1 --json --quiet --out " + (dir / "sizes").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  nlohmann::json options = nlohmann::json::parse(r.out)["options"];
+  EXPECT_EQ(options["patch_size"], 140.0);
+  EXPECT_EQ(options["element_size"], 70.0);
+  EXPECT_EQ(options["min_area"], 60.0);
+  r = aarad("solve cornell --patch-size 100 --max-shots 1 --json --quiet --out " + (dir / "sizes").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  options = nlohmann::json::parse(r.out)["options"];
+  EXPECT_EQ(options["patch_size"], 100.0);
+  EXPECT_EQ(options["element_size"], 50.0);
+  EXPECT_LT(options["min_area"].get<double>(), 1.0);  // 1e-7 d^2, d about 1 m in mm
+  r = aarad("solve cornell --element-size 30 --max-shots 1 --json --quiet --out " + (dir / "sizes").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  options = nlohmann::json::parse(r.out)["options"];
+  EXPECT_EQ(options["element_size"], 30.0);
+  EXPECT_LT(options["patch_size"].get<double>(), 140.0);  // d / 8
+}
+
 TEST(Cli, TheObjCopyOfTheCornellBoxSolvesAsTheBuiltIn) {
   const fs::path dir = work_dir();
   const std::string obj = std::string(AARAD_SOURCE_DIR) + "/data/scenes/cornell.obj";

@@ -273,6 +273,32 @@ TEST(InvariantBroken, InnerRadiosityIsNotTheMeanOfItsLeaves) {
   EXPECT_TRUE(reports(check_invariants(g), "radiosity-mean")) << describe(check_invariants(g));
 }
 
+// A 2 x 1 rectangle a million units from the origin (a building in georeferenced metres), every leaf split
+// three times: its points are known to about 1e-10 there, which is above the tolerances relative to its size,
+// so those follow the position error instead. The intact mesh reports nothing; real damage still shows.
+TEST(InvariantBroken, FarFromTheOriginTolerancesFollowThePositionError) {
+  const double x = 1e6, y = 1e6;
+  MeshingOptions o;
+  o.patch_size = 0.7;
+  o.element_size = 0.3;
+  o.min_area = 1e-9;
+  Hierarchy h(test::polygon_scene({{x, y}, {x + 2, y}, {x + 2, y + 1}, {x, y + 1}}), o);
+  for (int round = 0; round < 3; ++round)
+    for (NodeId leaf : h.leaves()) EXPECT_TRUE(h.split(leaf).ok);
+  double value = 0.1;
+  for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(value += 0.01);
+  h.update_inner_radiosity();
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << violations.size() << " violations, the first: " << describe(violations).substr(0, 300);
+
+  const NodeId leaf = h.leaves()[7];
+  h.radiosity(leaf).g *= 1.0 + 1e-5;  // a leaf changed without its ancestors
+  EXPECT_TRUE(reports(check_invariants(h), "radiosity-mean"));
+  h.radiosity(leaf).g /= 1.0 + 1e-5;
+  h.impl().area[leaf] *= 1.0 + 1e-4;  // far more than the position error moves an area
+  EXPECT_TRUE(reports_message(check_invariants(h), "children-tile-parent", "stores area"));
+}
+
 TEST(InvariantBroken, StoredAreaWrong) {
   Hierarchy h = refined();
   h.impl().area[left_leaf(h)] = 0.5;

@@ -134,6 +134,15 @@ void run_solve(SolveCommandOptions options) {
   for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", warning.c_str());
   refine::SolverOptions solver_options = options.solver;
   solver_options.meshing = refine::default_meshing(scene);
+  // A scene's sizes were chosen together: a patch or element size on the command line replaces all three, and
+  // what the command line leaves out takes the hierarchy's default (elements half the patch size, min area
+  // 1e-7 d^2), as --help says. Otherwise --patch-size 10 on the Cornell box would keep its 70 mm elements and
+  // 60 mm^2 min area: patches that are their own only element and can never split.
+  if (options.patch_size || options.element_size) {
+    solver_options.meshing.patch_size = 0.0;
+    solver_options.meshing.element_size = 0.0;
+    solver_options.meshing.min_area = 0.0;
+  }
   if (options.patch_size) solver_options.meshing.patch_size = *options.patch_size;
   if (options.element_size) solver_options.meshing.element_size = *options.element_size;
   if (options.min_area) solver_options.meshing.min_area = *options.min_area;
@@ -181,8 +190,15 @@ void run_solve(SolveCommandOptions options) {
     }
 
     const std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
-    for (const mesh::Violation& v : violations) {
-      std::fprintf(stderr, "aarad: warning: invariant %s violated: %s\n", v.invariant.c_str(), v.message.c_str());
+    // The first few on stderr; report.json lists every one.
+    constexpr std::size_t kShown = 10;
+    for (std::size_t i = 0; i < std::min(violations.size(), kShown); ++i) {
+      std::fprintf(stderr, "aarad: warning: invariant %s violated: %s\n", violations[i].invariant.c_str(),
+                   violations[i].message.c_str());
+    }
+    if (violations.size() > kShown) {
+      std::fprintf(stderr, "aarad: warning: and %zu more invariant violations, listed in report.json\n",
+                   violations.size() - kShown);
     }
     const refine::OutputResult files =
         refine::write_solution_files(solver, out, {.width = options.width, .height = options.height});
