@@ -265,7 +265,8 @@ Rgb parse_colour(const std::string& path, int line, const std::vector<std::strin
   throw InputError(path, line, "'" + t[0] + "' needs one or three numbers; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
 }
 
-void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& entries) {
+void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& entries,
+                   std::vector<std::string>& warnings) {
   std::ifstream file(path);
   std::istringstream in(clean_text(file));
   std::string line;
@@ -283,6 +284,10 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
       if (current) {
         current->file = path;
         current->line = number;
+      } else {
+        warnings.push_back(InputError::format(path, number, "material '" + name + "' is defined again (first at " +
+                                                                it->second.file + ":" + std::to_string(it->second.line) +
+                                                                "); this definition is ignored. Rename one of them"));
       }
     } else if (current && t[0] == "Kd") {
       current->kd = parse_colour(path, number, t);
@@ -453,10 +458,13 @@ Scene import_obj(const std::string& obj_path) {
   // The MTL libraries, read the same way tinyobjloader finds them: relative to the OBJ's folder.
   const fs::path folder = fs::path(obj_path).parent_path();
   std::map<std::string, MtlEntry> mtl_entries;
+  std::vector<fs::path> libraries_read;
   for (const auto& [line, file] : text.material_libraries) {
     const fs::path mtl = folder / file;
+    if (std::find(libraries_read.begin(), libraries_read.end(), mtl) != libraries_read.end()) continue;
+    libraries_read.push_back(mtl);
     if (fs::is_regular_file(mtl, ec) && std::ifstream(mtl)) {
-      read_mtl_text(mtl.string(), mtl_entries);
+      read_mtl_text(mtl.string(), mtl_entries, warnings);
     } else {
       warnings.push_back(InputError::format(obj_path, line, "material library '" + mtl.string() +
                                                                 "' not found; using the default material (reflectance "
@@ -497,6 +505,17 @@ Scene import_obj(const std::string& obj_path) {
   const bool positions_known = text.positions.size() == vertex_count;
   const std::string stem = fs::path(obj_path).stem().string();
 
+  // A face may be written twice (a copy-paste, an exporter's double): its area would count twice, and a lamp's
+  // emitted flux too, while the mesh covers it once. Repeats (the same vertex cycle, the same way round; the
+  // reverse is the back side of a two-sided panel) are skipped with a warning.
+  std::map<std::vector<std::array<double, 3>>, int> face_lines;  // canonical vertex cycle -> its line
+  const auto cycle_key = [](const std::vector<Vec3>& polygon) {
+    std::vector<std::array<double, 3>> cycle;
+    for (const Vec3& p : polygon) cycle.push_back({p.x, p.y, p.z});
+    std::rotate(cycle.begin(), std::min_element(cycle.begin(), cycle.end()), cycle.end());
+    return cycle;
+  };
+
   std::size_t face_number = 0;
   bool unassigned_faces = false;
   for (const auto& shape : shapes) {
@@ -530,8 +549,18 @@ Scene import_obj(const std::string& obj_path) {
         material = *default_material;
         unassigned_faces = true;
       }
-      if (!group) group = scene.add_group(group_name);
-      for (const auto& polygon : polygons) scene.add_face(*group, material, polygon, line);
+      for (const auto& polygon : polygons) {
+        const auto [first, inserted] = face_lines.try_emplace(cycle_key(polygon), line);
+        if (!inserted) {
+          warnings.push_back(InputError::format(obj_path, line, "face repeats the face on line " +
+                                                                    std::to_string(first->second) +
+                                                                    " (the same vertices, the same way round); "
+                                                                    "skipped, so its area and light count once"));
+          continue;
+        }
+        if (!group) group = scene.add_group(group_name);
+        scene.add_face(*group, material, polygon, line);
+      }
     }
   }
   if (unassigned_faces && text.material_uses.empty() && text.material_libraries.empty())

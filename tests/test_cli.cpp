@@ -117,6 +117,9 @@ TEST(Cli, UnknownOptionAndBadResolutionExitTwo) {
     EXPECT_EQ(r.code, 2) << command;
     EXPECT_NE(r.err.find("--relaxation"), std::string::npos) << command << ": " << r.err;
   }
+  const ProgramRun empty_out = aarad("solve cornell --out ''");  // not silently out/cornell
+  EXPECT_EQ(empty_out.code, 2);
+  EXPECT_NE(empty_out.err.find("--out: the directory name is empty"), std::string::npos) << empty_out.err;
 }
 
 TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {

@@ -361,6 +361,28 @@ TEST_F(SceneImport, import_byte_order_marks_and_trailing_comments_are_read_as_te
   EXPECT_DOUBLE_EQ(scene.total_area(), 2.0);
 }
 
+// A face written twice counts once (its area, a lamp's flux), with a warning naming both lines; the same
+// vertices the other way round are the back of a two-sided panel and stay. A material defined twice warns too.
+TEST_F(SceneImport, import_repeated_faces_are_skipped_and_repeated_materials_warn) {
+  write("s.mtl", std::string(kSquareMtl) + "newmtl lamp\nKd 0.1 0.1 0.1\nKe 9 9 9\n");
+  const std::string obj = write("twice.obj",
+                                "mtllib s.mtl\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "v 0 0 2\nv 0 1 2\nv 1 1 2\nv 1 0 2\n"
+                                "g floor\nusemtl grey\nf 1 2 3 4\nf 1 4 3 2\n"  // the floor, and its back
+                                "g light\nusemtl lamp\nf 5 6 7 8\nf 7 8 5 6\n");  // the lamp, twice
+  const Scene scene = import_obj(obj);
+  EXPECT_DOUBLE_EQ(scene.total_area(), 3.0);
+  EXPECT_EQ(scene.groups[*scene.find_group("floor")].surfaces.size(), 2u);  // front and back
+  ASSERT_EQ(scene.warnings.size(), 2u);
+  EXPECT_NE(scene.warnings[0].find("s.mtl:6: material 'lamp' is defined again (first at"), std::string::npos)
+      << scene.warnings[0];
+  EXPECT_NE(scene.warnings[1].find("twice.obj:17: face repeats the face on line 16"), std::string::npos)
+      << scene.warnings[1];
+  const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
+  EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));  // the first definition
+}
+
 TEST_F(SceneImport, import_camera_comment_is_read_back) {
   const std::string obj = write("cam.obj",
                                 "# aarad camera: eye 1 2 3 forward 0 0 2 up 0 1 0 vertical_fov 0.5\n"
