@@ -175,13 +175,19 @@ std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t) {
 }
 
 std::optional<MeshingHint> parse_meshing_comment(const std::vector<std::string>& t) {
-  // # aarad meshing: patch_size P element_size E min_area A
-  if (t.size() != 6 || t[0] != "patch_size" || t[2] != "element_size" || t[4] != "min_area") return std::nullopt;
+  // # aarad meshing: patch_size P element_size E min_area A, in any order, each at most once; one left out is 0
+  // (the hierarchy's default)
+  static constexpr std::array<const char*, 3> kKeys{"patch_size", "element_size", "min_area"};
+  if (t.empty() || t.size() % 2 != 0) return std::nullopt;
   std::array<double, 3> v{};
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    const auto n = parse_number(t[2 * i + 1]);
-    if (!n || !std::isfinite(*n) || !(*n >= 0.0)) return std::nullopt;  // 0: the hierarchy's default
-    v[i] = *n;
+  std::array<bool, 3> seen{};
+  for (std::size_t i = 0; i < t.size(); i += 2) {
+    const auto k = static_cast<std::size_t>(std::find(kKeys.begin(), kKeys.end(), t[i]) - kKeys.begin());
+    if (k == kKeys.size() || seen[k]) return std::nullopt;
+    const auto n = parse_number(t[i + 1]);
+    if (!n || !std::isfinite(*n) || !(*n >= 0.0)) return std::nullopt;
+    v[k] = *n;
+    seen[k] = true;
   }
   return MeshingHint{v[0], v[1], v[2]};
 }
@@ -235,8 +241,9 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       text.meshing = parse_meshing_comment(std::vector<std::string>(t.begin() + 3, t.end()));
       if (!text.meshing)
         warnings.push_back(InputError::format(path, number, "meshing comment not understood, ignored; write '# aarad "
-                                                            "meshing: patch_size P element_size E min_area A' with "
-                                                            "numbers >= 0 (0: from the scene's size)"));
+                                                            "meshing: patch_size P element_size E min_area A' (any "
+                                                            "of them, in any order) with numbers >= 0 (0 or left "
+                                                            "out: from the scene's size)"));
     }
   }
   return text;

@@ -402,8 +402,15 @@ TEST_F(SceneImport, import_meshing_comment_is_read_back_and_a_bad_one_warns) {
   EXPECT_EQ(scene.meshing->element_size, 0.25);
   EXPECT_EQ(scene.meshing->min_area, 1e-3);
   EXPECT_FALSE(import_obj(write("plain.obj", faces)).meshing.has_value());
+  // In another order, and with one left out (0: from the scene's size).
+  const Scene some = import_obj(write("some.obj", "# aarad meshing: min_area 2e-3 patch_size 0.4\n" + faces));
+  ASSERT_TRUE(some.meshing.has_value());
+  EXPECT_EQ(some.meshing->patch_size, 0.4);
+  EXPECT_EQ(some.meshing->element_size, 0.0);
+  EXPECT_EQ(some.meshing->min_area, 2e-3);
   for (const char* bad : {"# aarad meshing: patch_size 0.5 element_size -1 min_area 1e-3",
-                          "# aarad meshing: patch_size 0.5 element_size 0.25", "# aarad meshing: size 1 2 3 4 5 6"}) {
+                          "# aarad meshing: patch_size 0.5 patch_size 0.25", "# aarad meshing: size 1 2 3 4 5 6",
+                          "# aarad meshing: patch_size", "# aarad meshing:"}) {
     const Scene s = import_obj(write("bad.obj", std::string(bad) + "\n" + faces));
     EXPECT_FALSE(s.meshing.has_value()) << bad;
     const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& w) {
