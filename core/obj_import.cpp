@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -221,6 +222,13 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
         if (!vertex_reference(t[i]))
           throw InputError(path, number, "face vertex '" + t[i] + "' is not a vertex reference; write v, v/vt, "
                                          "v//vn or v/vt/vn with whole numbers (negative ones count from the end)");
+        // tinyobjloader reads indices as int: a larger one would wrap around to some other vertex.
+        errno = 0;
+        const long long index = std::strtoll(t[i].c_str(), nullptr, 10);
+        if (errno == ERANGE || index > std::numeric_limits<int>::max() || index < -std::numeric_limits<int>::max())
+          throw InputError(path, number, "vertex index '" + t[i].substr(0, t[i].find('/')) + "' is out of range (the "
+                                         "file defines " + std::to_string(text.positions.size()) + " vertices "
+                                         "before this line); fix the face's vertex references");
       }
       if (t.size() < 4) {
         warnings.push_back(InputError::format(path, number, "face with fewer than three vertices skipped; give it "

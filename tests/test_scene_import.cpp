@@ -140,6 +140,12 @@ TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
   const InputError e = import_error(write("range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\n\nf 1 2 7\n"));
   EXPECT_EQ(e.line(), 5);
   EXPECT_NE(e.message().find("out of range"), std::string::npos);
+  // Beyond what an int holds, which would wrap around to vertex 2 (4294967298 = 2^32 + 2) or another.
+  for (const char* face : {"f 1 2 4294967298", "f 1 2 -4294967295", "f 1 2 99999999999999999999/1"}) {
+    const InputError big = import_error(write("big.obj", std::string("v 0 0 0\nv 1 0 0\nv 1 1 0\n") + face + "\n"));
+    EXPECT_EQ(big.line(), 4) << face;
+    EXPECT_NE(big.message().find("out of range"), std::string::npos) << face << ": " << big.message();
+  }
 }
 
 TEST_F(SceneImport, import_face_with_a_token_that_is_not_a_vertex_reference_is_error_with_line) {
