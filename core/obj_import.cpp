@@ -26,6 +26,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <set>
 #include <optional>
 #include <sstream>
 #include <utility>
@@ -193,15 +194,32 @@ std::optional<MeshingHint> parse_meshing_comment(const std::vector<std::string>&
   return MeshingHint{v[0], v[1], v[2]};
 }
 
+// Statements of the OBJ format (Wavefront's specification, appendix B1) that this importer reads or may pass
+// over in silence: texture and normal data, groups, smoothing, free-form geometry, display attributes.
+bool obj_statement(const std::string& key) {
+  static const std::set<std::string> kKnown{
+      "v",     "vt",    "vn",     "vp",     "f",      "fo",       "l",          "p",         "o",
+      "g",     "s",     "mg",     "usemtl", "mtllib", "cstype",   "deg",        "bmat",      "step",
+      "curv",  "curv2", "surf",   "parm",   "trim",   "hole",     "scrv",       "sp",        "end",
+      "con",   "bevel", "lod",    "maplib", "usemap", "c_interp", "d_interp",   "shadow_obj", "trace_obj",
+      "ctech", "stech", "call",   "csh"};
+  return key.starts_with('#') || kKnown.contains(key);
+}
+
 ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std::string>& warnings) {
   ObjText text;
   std::string line;
   int number = 0;
+  std::map<std::string, std::pair<int, int>> unknown;  // statement -> (first line, lines)
   while (std::getline(in, line)) {
     ++number;
     const std::vector<std::string> t = split_tokens(line);
     if (t.empty()) continue;
     const std::string& key = t[0];
+    if (!obj_statement(key)) {
+      auto& [first, count] = unknown.try_emplace(key, number, 0).first->second;
+      ++count;
+    }
     if (key == "v") {
       if (t.size() < 4)
         throw InputError(path, number, "a vertex needs three coordinates ('v x y z'); complete or remove this line");
@@ -253,6 +271,13 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
                                                             "of them, in any order) with numbers >= 0 (0 or left "
                                                             "out: from the scene's size)"));
     }
+  }
+  for (const auto& [key, where] : unknown) {
+    warnings.push_back(InputError::format(
+        path, where.first, "'" + key + "' is not an OBJ statement; " +
+                               (where.second == 1 ? std::string("this line is")
+                                                  : "this line and " + std::to_string(where.second - 1) + " more are") +
+                               " ignored (a typo, or a file that is not OBJ?)"));
   }
   return text;
 }

@@ -389,6 +389,20 @@ TEST_F(SceneImport, import_repeated_faces_are_skipped_and_repeated_materials_war
   EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));  // the first definition
 }
 
+// A statement OBJ does not have (a typo, or another format) is named with its first line and how many more.
+TEST_F(SceneImport, import_unknown_statements_warn_once_with_their_first_line) {
+  const std::string obj = write("typo.obj", "v 0 0 0\nvv 1 0 0\nv 1 0 0\nvt 0 0\nv 1 1 0\nvv 2 2 2\ns off\nf 1 2 3\n");
+  const Scene scene = import_obj(obj);
+  const auto said = std::find_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
+    return w.find("typo.obj:2: 'vv' is not an OBJ statement; this line and 1 more are ignored") != std::string::npos;
+  });
+  EXPECT_NE(said, scene.warnings.end());
+  for (const std::string& w : scene.warnings) {
+    EXPECT_EQ(w.find("'vt'"), std::string::npos) << w;
+    EXPECT_EQ(w.find("'s'"), std::string::npos) << w;
+  }
+}
+
 TEST_F(SceneImport, import_camera_comment_is_read_back) {
   const std::string obj = write("cam.obj",
                                 "# aarad camera: eye 1 2 3 forward 0 0 2 up 0 1 0 vertical_fov 0.5\n"
