@@ -105,6 +105,16 @@ bool is_simple(std::span<const Vec2> polygon) {
   return true;
 }
 
+bool contains(std::span<const Vec2> polygon, const Vec2& p) {
+  bool in = false;
+  for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const Vec2& a = polygon[i];
+    const Vec2& b = polygon[j];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
 void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2> out) {
   // Drop the dominant axis of n; swap the remaining two when needed to keep the winding.
   const Vec3 a = glm::abs(n);

@@ -26,6 +26,9 @@ double planarity_deviation(std::span<const Vec3> polygon);
 double signed_area(std::span<const Vec2> polygon);
 bool is_convex(std::span<const Vec2> polygon);  // strictly or with collinear vertices; either winding
 bool is_simple(std::span<const Vec2> polygon);  // no two non-adjacent edges touch, adjacent ones meet only at their shared vertex
+// Crossing-number test of a point against a simple polygon, in doubles: a point on the boundary may go either
+// way, so callers ask about points that are not on it (a triangle's centroid, a face's area centroid).
+bool contains(std::span<const Vec2> polygon, const Vec2& p);
 
 // Projects a planar 3D polygon onto the coordinate plane most orthogonal to `n`, keeping the winding
 // seen from the tip of n counter-clockwise in 2D.

@@ -162,18 +162,6 @@ std::optional<std::vector<Vec3>> convex_outline(const Scene& scene, const Surfac
   return std::nullopt;
 }
 
-// Crossing-number test of a point against a simple polygon (2D); points on the boundary may go either way,
-// which is fine for the triangle centroids it is asked about (they are never on a constraint).
-bool inside(const std::vector<Vec2>& polygon, const Vec2& p) {
-  bool in = false;
-  for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-    const Vec2& a = polygon[i];
-    const Vec2& b = polygon[j];
-    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
-  }
-  return in;
-}
-
 // Divides every triangle patch into m x m similar triangles, m the same over the surface so patches sharing
 // an edge conform. Points on a patch edge are computed from the edge's lower-index end, so both patches get
 // bit-identical points.
@@ -283,7 +271,7 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     polygons.push_back(std::move(polygon));
   }
   auto in_domain = [&](const Vec2& p) {
-    return std::any_of(polygons.begin(), polygons.end(), [&](const auto& poly) { return inside(poly, p); });
+    return std::any_of(polygons.begin(), polygons.end(), [&](const auto& poly) { return contains(poly, p); });
   };
   std::vector<Point2> seeds;  // one point in every region outside the surface (holes), which is not meshed
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {

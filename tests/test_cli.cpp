@@ -352,6 +352,22 @@ TEST(Cli, TheAnalyticBackEndWarnsWhereSurfacesMayHideOneAnother) {
   EXPECT_NE(r.err.find("warning: the analytic back end ignores visibility"), std::string::npos) << r.err;
 }
 
+// The centroid of a C-shaped group lies in its opening, off its faces: the factors are from there, with a
+// warning; a square's centroid is on it.
+TEST(Cli, FormfactorsWarnWhenTheCentroidIsOffTheGroup) {
+  const fs::path obj = write_file("c_shape.obj",
+                                  "o floor\nv 0 0 0\nv 3 0 0\nv 3 0 1\nv 1 0 1\nv 1 0 2\nv 3 0 2\nv 3 0 3\n"
+                                  "v 0 0 3\nf 8 7 6 5 4 3 2 1\n"
+                                  "o lid\nv 0 2 0\nv 3 2 0\nv 3 2 3\nv 0 2 3\nf 9 10 11 12\n");
+  ProgramRun r = aarad("formfactors " + obj.string() + " --from floor --ff analytic --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: the centroid of group 'floor' lies outside its faces"), std::string::npos) << r.err;
+  EXPECT_GT(nlohmann::json::parse(r.out)["point"][0].get<double>(), 1.0);  // in the opening, x > 1
+  r = aarad("formfactors " + obj.string() + " --from lid --ff analytic");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("centroid"), std::string::npos) << r.err;
+}
+
 TEST(Cli, FormfactorsFromTheCornellFloorPointToTheLight) {
   // references.md: the Cornell box floor point (278, 0, 279.5), normal (0, 1, 0), sees the light (its official
   // vertices, facing down) with 0.0142069579. The built-in box's floor is cut around the blocks, so its

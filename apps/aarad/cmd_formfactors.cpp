@@ -46,7 +46,24 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
     total += a;
   }
   if (!(total > 0.0)) throw Error("group '" + group.name + "' has zero area; pick a group with a real face");
-  return formfactor::Shooter::from_normal(weighted / total, surface.plane.normal);
+  const Vec3 point = weighted / total;
+  // The centroid of a concave group (an L, a C) may lie off its faces: the factors are still from that point.
+  const Vec3& n = surface.plane.normal;
+  Vec2 point_2d;
+  project_to_2d(std::span<const Vec3>(&point, 1), n, std::span<Vec2>(&point_2d, 1));
+  const bool on_a_face = std::any_of(surface.faces.begin(), surface.faces.end(), [&](std::uint32_t f) {
+    const std::vector<Vec3>& vertices = scene.faces[f].vertices;
+    std::vector<Vec2> face_2d(vertices.size());
+    project_to_2d(vertices, n, face_2d);
+    return contains(face_2d, point_2d);
+  });
+  if (!on_a_face) {
+    std::fprintf(stderr,
+                 "aarad: warning: the centroid of group '%s' lies outside its faces (the group is concave); the form "
+                 "factors are from that point, in the group's plane\n",
+                 group.name.c_str());
+  }
+  return formfactor::Shooter::from_normal(point, n);
 }
 
 void run_formfactors(const FormFactorsOptions& options) {
