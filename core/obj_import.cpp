@@ -29,6 +29,7 @@
 #include <set>
 #include <optional>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 namespace aarad {
@@ -50,19 +51,25 @@ std::vector<std::string> split_tokens(const std::string& line) {
 }
 
 // The text of an OBJ or MTL file as both readers here see it: without a UTF-8 byte-order mark (Notepad writes
-// one, and it would hide the first statement, often the mtllib or newmtl line) and without a comment after a
-// statement ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would take for part of the statement.
-// Whole-line comments stay (the "# aarad" lines are read from them), and every line keeps its number.
+// one, and it would hide the first statement, often the mtllib or newmtl line), with old Mac line ends (CR
+// alone) read as line ends, and without a comment after a statement of numbers or file and material names
+// ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would read as part of it. Group and material
+// definitions keep a '#' ("o Chair #1", "newmtl Oak #2"); whole-line
+// comments stay (the "# aarad" lines are read from them); every line keeps its number.
 std::string clean_text(std::istream& in) {
+  static const std::set<std::string> kNumeric{"v",  "vt", "vn", "vp", "f",  "l",  "p", "s",  "mtllib", "usemtl",
+                                              "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr", "illum"};
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
+  if (text.find('\n') == std::string::npos) std::replace(text.begin(), text.end(), '\r', '\n');
   std::string out;
   out.reserve(text.size() + 1);
   std::istringstream lines(text);
   std::string line;
   while (std::getline(lines, line)) {
     const auto first = line.find_first_not_of(" \t");
-    if (first != std::string::npos && line[first] != '#') {
+    const auto key_end = first == std::string::npos ? first : line.find_first_of(" \t", first);
+    if (first != std::string::npos && kNumeric.contains(line.substr(first, key_end - first))) {
       for (std::size_t i = first + 1; i < line.size(); ++i) {
         if (line[i] == '#' && (line[i - 1] == ' ' || line[i - 1] == '\t')) {
           line.erase(i);
@@ -258,6 +265,10 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       for (std::size_t i = 1; i < t.size(); ++i) text.material_libraries.emplace_back(number, t[i]);
     } else if (key == "usemtl") {
       text.material_uses.emplace_back(number, t.size() > 1 ? t[1] : std::string());
+      if (t.size() > 2)
+        warnings.push_back(InputError::format(path, number, "material name with a space: OBJ readers take only its "
+                                                            "first word, '" + t[1] + "'; write the name without "
+                                                            "spaces here and in the MTL file"));
     } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "camera:") {
       text.camera = parse_camera_comment(std::vector<std::string>(t.begin() + 3, t.end()));
       if (!text.camera)
@@ -317,7 +328,8 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
     const std::vector<std::string> t = split_tokens(line);
     if (t.empty()) continue;
     if (t[0] == "newmtl") {
-      const std::string name = t.size() > 1 ? t[1] : std::string();
+      // The rest of the line, as tinyobjloader names it (usemtl takes one word: import_obj warns there).
+      const std::string name = trim(line.substr(line.find("newmtl") + 6));
       // The first definition of a name wins, as in tinyobjloader's material map.
       const auto [it, inserted] = entries.try_emplace(name);
       current = inserted ? &it->second : nullptr;
@@ -546,9 +558,11 @@ Scene import_obj(const std::string& obj_path) {
   const std::string stem = fs::path(obj_path).stem().string();
 
   // A face may be written twice (a copy-paste, an exporter's double): its area would count twice, and a lamp's
-  // emitted flux too, while the mesh covers it once. Repeats (the same vertex cycle, the same way round; the
-  // reverse is the back side of a two-sided panel) are skipped with a warning.
-  std::map<std::vector<std::array<double, 3>>, int> face_lines;  // canonical vertex cycle -> its line
+  // emitted flux too, while the mesh covers it once. Repeats in one group with one material (the same vertex
+  // cycle, the same way round; the reverse is the back side of a two-sided panel) are skipped with a warning.
+  // The same polygon in another group or material is another object and stays.
+  using FaceKey = std::tuple<std::string, std::uint32_t, std::vector<std::array<double, 3>>>;
+  std::map<FaceKey, int> face_lines;  // (group, material, canonical vertex cycle) -> its line
   const auto cycle_key = [](const std::vector<Vec3>& polygon) {
     std::vector<std::array<double, 3>> cycle;
     for (const Vec3& p : polygon) cycle.push_back({p.x, p.y, p.z});
@@ -590,12 +604,13 @@ Scene import_obj(const std::string& obj_path) {
         unassigned_faces = true;
       }
       for (const auto& polygon : polygons) {
-        const auto [first, inserted] = face_lines.try_emplace(cycle_key(polygon), line);
+        const auto [first, inserted] = face_lines.try_emplace(FaceKey{group_name, material, cycle_key(polygon)}, line);
         if (!inserted) {
           warnings.push_back(InputError::format(obj_path, line, "face repeats the face on line " +
                                                                     std::to_string(first->second) +
-                                                                    " (the same vertices, the same way round); "
-                                                                    "skipped, so its area and light count once"));
+                                                                    " (the same vertices, the same way round, "
+                                                                    "group and material); skipped, so its area and "
+                                                                    "light count once"));
           continue;
         }
         if (!group) group = scene.add_group(group_name);

@@ -6,8 +6,10 @@
 // OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back appends a default-constructed colour, whose
 // components VectorT leaves uninitialized until they are set; GCC 12 reports that as -Wmaybe-uninitialized
 // from a system header. Every colour is assigned before the mesh is written.
+#pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Core/IO/MeshIO.hh>
+#pragma GCC diagnostic pop
 
 #include "mesh/export_ply.h"
 

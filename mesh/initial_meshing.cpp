@@ -326,9 +326,17 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
   const Budget budget{scene, surface, max_elements, scene_limit};
   const std::vector<Vec3>& first = scene.faces[surface.faces.front()].vertices;
   const Frame frame = frame_of(surface.plane, first.front());
-  const std::optional<std::vector<Vec3>> outline =
+  std::optional<std::vector<Vec3>> outline =
       surface.faces.size() == 1 ? std::optional<std::vector<Vec3>>(first) : convex_outline(scene, surface, frame);
   if (outline) {
+    // The grids interpolate between the corners, so a corner that import let off the surface's plane (faces
+    // within 1e-6 of the diagonal join a surface) would take whole rows of patches off it: such corners are
+    // moved onto the plane. Corners within 1e-12 of the diagonal keep their bits.
+    const double off = 1e-12 * scene.diagonal();
+    for (Vec3& p : *outline) {
+      const double distance = surface.plane.signed_distance(p);
+      if (std::abs(distance) > off) p -= distance * surface.plane.normal;
+    }
     if (strictly_convex_quad(*outline, frame)) return mesh_convex_quad(*outline, patch_size, element_size, budget);
     if (outline->size() == 3 && aarad::area(*outline) > 0.0)
       return mesh_triangle(*outline, patch_size, element_size, budget);

@@ -321,6 +321,7 @@ class Checker {
   // Children tile their parent: areas sum, corners in the parent's plane and inside it, counter-clockwise
   // like it, no two children overlap (separating-axis test on the convex children).
   void check_tiling() {
+    allowed_area_error_.assign(m_.parent.size(), 0.0);
     std::vector<Vec3> parent_corners, child_corners;
     std::vector<std::vector<Vec2>> children_2d;
     std::vector<NodeId> child_nodes;  // the node of each entry of children_2d
@@ -357,6 +358,7 @@ class Checker {
           if (outside(parent_2d, p))
             report("children-tile-parent", c, "a corner of child ", c, " lies outside node ", n);
       }
+      allowed_area_error_[n] = area_tolerance(m_.area[n], perimeters) / m_.area[n];
       if (std::abs(sum - m_.area[n]) > area_tolerance(m_.area[n], perimeters))
         report("children-tile-parent", n, "children of node ", n, " cover ", sum, " of its area ", m_.area[n],
                " (relative ", (sum - m_.area[n]) / m_.area[n], ")");
@@ -429,11 +431,12 @@ class Checker {
   // Every inner node's B is the area-weighted mean of the B of the leaves below it. The hierarchy weighs an
   // inner child by its stored area, which may differ from the sum of its leaves' areas by the position error
   // (check_tiling); `slack` bounds what those differences below a node move its mean, relative to the largest
-  // |B| of its leaves (`peak`).
+  // |B| of its leaves (`peak`). A difference is counted up to what check_tiling allows (`allowed`, summed down
+  // the levels): a wrong stored area, reported there, does not also hide a wrong mean above it.
   void check_radiosity() {
     const std::size_t count = m_.parent.size();
     std::vector<Rgb> weighted(count);
-    std::vector<double> area(count, 0.0), slack(count, 0.0), peak(count, 0.0);
+    std::vector<double> area(count, 0.0), slack(count, 0.0), peak(count, 0.0), allowed(count, 0.0);
     for (std::size_t i = count; i-- > 0;) {  // children have larger ids than their parent
       const auto n = static_cast<NodeId>(i);
       double weight_error = 0.0;  // of n as its parent's child: |stored area - its leaves' area|, relative
@@ -449,13 +452,15 @@ class Checker {
           if (std::abs(b[ch] - mean[ch]) > kRadiosityTolerance * scale + 2.0 * slack[n] * peak[n])
             report("radiosity-mean", n, "node ", n, " has B[", ch, "] = ", b[ch], " but its leaves average ", mean[ch]);
         }
-        weight_error = std::abs(m_.area[n] - area[n]) / area[n];
+        allowed[n] += allowed_area_error_[n];
+        weight_error = std::min(std::abs(m_.area[n] - area[n]) / area[n], allowed[n]);
       }
       const NodeId p = m_.parent[n];
       if (p != kNoNode && valid_node(p) && p < n) {
         weighted[p] += weighted[n];
         area[p] += area[n];
         slack[p] = std::max(slack[p], slack[n] + weight_error);
+        allowed[p] = std::max(allowed[p], allowed[n]);
         peak[p] = std::max(peak[p], peak[n]);
       }
     }
@@ -466,6 +471,7 @@ class Checker {
   const LeafMesh& mesh_;
   double length_tolerance_ = 0.0;
   double position_error_ = 0.0;
+  std::vector<double> allowed_area_error_;  // per node, from check_tiling: relative
   std::vector<Violation> violations_;
   // Scratch of check_tiling: the 2D bounding box of every child of one node, and their sweep order.
   struct Box {

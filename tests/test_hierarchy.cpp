@@ -143,8 +143,29 @@ TEST(Hierarchy, FacesTilingOneConvexPolygonAreMeshedAsThatPolygon) {
   const Hierarchy l(faces_scene({{{0, 0}, {2, 0}, {2, 1}, {0, 1}}, {{0, 1}, {1, 1}, {1, 2}, {0, 2}}}), sizes(0.6, 0.3));
   EXPECT_NEAR(total_leaf_area(l), 3.0, 1e-12);
   for (NodeId n : l.leaves()) EXPECT_EQ(l.corner_count(n), 3);
-  const Hierarchy overlap(faces_scene({{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 0}, {1, 1}}}), sizes(0.2, 0.1));
+  // Two triangles of the square that overlap in its lower quarter (the edge (0,0)-(1,0) twice the same way):
+  // their union, of area 3/4, not the square.
+  const Hierarchy overlap(faces_scene({{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 0}, {0, 1}}}), sizes(0.2, 0.1));
+  EXPECT_NEAR(total_leaf_area(overlap), 0.75, 1e-12);
   for (NodeId n : overlap.leaves()) EXPECT_EQ(overlap.corner_count(n), 3);
+}
+
+// Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
+// the plane, as two triangles, is meshed as the quad with its corners moved onto the surface's plane, so no
+// child leaves its parent's plane.
+TEST(Hierarchy, CornersOfANearlyPlanarQuadAreMovedOntoItsPlane) {
+  Scene scene;
+  scene.name = "nearly";
+  const std::uint32_t material = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("quad");
+  scene.add_face(group, material, {{0, 0, 0}, {1, 0, 0}, {1, 1, 1e-7}});
+  scene.add_face(group, material, {{0, 0, 0}, {1, 1, 1e-7}, {0, 1, 0}});
+  scene.build_surfaces();
+  ASSERT_EQ(scene.surfaces.size(), 1u);
+  const Hierarchy h(scene, sizes(0.2, 0.1));
+  EXPECT_EQ(h.patches().size(), 25u);
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << violations.size() << ": " << describe(violations).substr(0, 300);
 }
 
 TEST(Hierarchy, PatchNotCutFurtherStillHasOneElementChild) {

@@ -3,8 +3,10 @@
 // OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back appends a default-constructed colour, whose
 // components VectorT leaves uninitialized until they are set; GCC 12 reports that as -Wmaybe-uninitialized
 // from a system header. Here every colour is filled by reading a PLY file back.
+#pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Core/IO/MeshIO.hh>
+#pragma GCC diagnostic pop
 
 #include "core/builtin_scenes.h"
 #include "mesh/display.h"

@@ -355,12 +355,12 @@ TEST_F(SceneImport, import_byte_order_marks_and_trailing_comments_are_read_as_te
                                 bom + "mtllib s.mtl # the materials\n"
                                 "v 0 0 0 # origin\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
                                 "v 0 0 2\nv 0 1 2\nv 1 1 2\nv 1 0 2\n"
-                                "g floor # ground\nusemtl grey\nf 1 2 3 4 # floor quad\n"
+                                "g floor #1\nusemtl grey\nf 1 2 3 4 # floor quad\n"
                                 "g light\nusemtl lamp\t# the lamp\nf 5 6 7 8\n");
   const Scene scene = import_obj(obj);
   EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
   ASSERT_EQ(scene.groups.size(), 2u);
-  EXPECT_EQ(scene.groups[0].name, "floor");
+  EXPECT_EQ(scene.groups[0].name, "floor #1");  // a name keeps its '#'
   const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
   EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));
   EXPECT_EQ(scene.materials[light.material].reflectance, Rgb(0.2));
@@ -387,6 +387,26 @@ TEST_F(SceneImport, import_repeated_faces_are_skipped_and_repeated_materials_war
       << scene.warnings[1];
   const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
   EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));  // the first definition
+
+  // The same polygon in another group or with another material is another object: kept.
+  const Scene two = import_obj(write("shade.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                                  "g shade\nusemtl grey\nf 1 2 3 4\ng lamp\nusemtl lamp\nf 1 2 3 4\n"));
+  EXPECT_EQ(two.faces.size(), 2u);
+  EXPECT_EQ(two.groups.size(), 2u);
+}
+
+// Old Mac files end lines with CR alone; a material name with a space defines the whole name in MTL but is one
+// word to usemtl (tinyobjloader's reading, which the importer follows), so it warns.
+TEST_F(SceneImport, import_cr_line_ends_and_material_names_with_spaces) {
+  const std::string obj = write("mac.obj", "v 0 0 0\rv 1 0 0\rv 1 1 0\rf 1 2 3 # lid\rv 0 0 1\rf 1 2 4\r");
+  const Scene mac = import_obj(obj);
+  EXPECT_EQ(mac.faces.size(), 2u);
+  write("wood.mtl", "newmtl Wood Dark\nKd 0.2 0.1 0.05\n");
+  const Scene wood = import_obj(write("wood.obj", "mtllib wood.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl Wood Dark\nf 1 2 3\n"));
+  const auto said = std::find_if(wood.warnings.begin(), wood.warnings.end(), [](const std::string& w) {
+    return w.find("wood.obj:5: material name with a space") != std::string::npos;
+  });
+  EXPECT_NE(said, wood.warnings.end());
 }
 
 // A statement OBJ does not have (a typo, or another format) is named with its first line and how many more.

@@ -4,9 +4,9 @@
 
 #include "core/builtin_scenes.h"
 #include "core/error.h"
-#include "refine/report.h"
 #include "core/polygon.h"
 #include "formfactor/backend.h"
+#include "refine/report.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

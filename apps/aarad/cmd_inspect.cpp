@@ -4,8 +4,8 @@
 
 #include "core/builtin_scenes.h"
 #include "core/error.h"
-#include "refine/report.h"
 #include "core/scene.h"
+#include "refine/report.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

@@ -282,7 +282,10 @@ void add_solve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", options->out, "Output directory (default out/<scene name>)")
       ->check(CLI::Validator(
-          [](const std::string& value) { return value.empty() ? std::string("the directory name is empty; give one, or leave --out out for out/<scene>") : std::string(); },
+          [](const std::string& value) {
+            return value.empty() ? std::string("the directory name is empty; name one, or drop --out for out/<scene>")
+                                 : std::string();
+          },
           "DIR", "a directory name"));
   cmd->add_option("--width", options->width, "Image width in pixels")
       ->check(whole_number_in(1, 16384))
