@@ -128,8 +128,14 @@ std::optional<std::vector<Vec3>> convex_outline(const Scene& scene, const Surfac
   const auto key = [](const Vec3& p) { return Key{p.x, p.y, p.z}; };
   std::map<std::pair<Key, Key>, std::pair<Vec3, Vec3>> edges;  // directed edges not (yet) cancelled
   double faces_area = 0.0;
+  std::vector<Vec2> face_2d;
   for (const std::uint32_t fi : surface.faces) {
     const std::vector<Vec3>& face = scene.faces[fi].vertices;
+    // Edges cancel to the outline of a tiling only for simple faces (import refuses others; a scene built
+    // through the library may hold a bow-tie, whose lobes would cover part of the outline twice).
+    face_2d.clear();
+    for (const Vec3& p : face) face_2d.push_back(frame.to_2d(p));
+    if (!is_simple(face_2d)) return std::nullopt;
     faces_area += aarad::area(face);
     for (std::size_t i = 0; i < face.size(); ++i) {
       const Vec3& a = face[i];

@@ -148,6 +148,12 @@ TEST(Hierarchy, FacesTilingOneConvexPolygonAreMeshedAsThatPolygon) {
   const Hierarchy overlap(faces_scene({{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 0}, {0, 1}}}), sizes(0.2, 0.1));
   EXPECT_NEAR(total_leaf_area(overlap), 0.75, 1e-12);
   for (NodeId n : overlap.leaves()) EXPECT_EQ(overlap.corner_count(n), 3);
+  // A bow-tie face (import refuses it; the library may be handed one) with two triangles whose edges cancel to
+  // the square [0, 2]^2 although the bow-tie's lower lobe covers part of it twice: not taken for the square.
+  const Hierarchy bow_tie(faces_scene({{{0, 0}, {2, 0}, {0, 1}, {1, 1}}, {{0, 0}, {1, 1}, {0, 1}},
+                                       {{0, 1}, {2, 0}, {2, 2}, {0, 2}}}),
+                          sizes(0.5, 0.25));
+  for (NodeId p : bow_tie.patches()) EXPECT_EQ(bow_tie.corner_count(p), 3);
 }
 
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
