@@ -26,8 +26,8 @@
 #include <iterator>
 #include <limits>
 #include <map>
-#include <set>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <tuple>
 #include <utility>
@@ -54,10 +54,10 @@ std::vector<std::string> split_tokens(const std::string& line) {
 // one, and it would hide the first statement, often the mtllib or newmtl line), with old Mac line ends (CR
 // alone) read as line ends, and without a comment after a statement of numbers or file and material names
 // ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would read as part of it. Group and material
-// definitions keep a '#' ("o Chair #1", "newmtl Oak #2"); whole-line
-// comments stay (the "# aarad" lines are read from them); every line keeps its number.
+// definitions keep a '#' ("o Chair #1", "newmtl Oak #2"); whole-line comments stay (the "# aarad" lines are
+// read from them); every line keeps its number.
 std::string clean_text(std::istream& in) {
-  static const std::set<std::string> kNumeric{"v",  "vt", "vn", "vp", "f",  "l",  "p", "s",  "mtllib", "usemtl",
+  static const std::set<std::string> kCommentAfter{"v",  "vt", "vn", "vp", "f",  "l",  "p", "s",  "mtllib", "usemtl",
                                               "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr", "illum"};
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
@@ -69,7 +69,7 @@ std::string clean_text(std::istream& in) {
   while (std::getline(lines, line)) {
     const auto first = line.find_first_not_of(" \t");
     const auto key_end = first == std::string::npos ? first : line.find_first_of(" \t", first);
-    if (first != std::string::npos && kNumeric.contains(line.substr(first, key_end - first))) {
+    if (first != std::string::npos && kCommentAfter.contains(line.substr(first, key_end - first))) {
       for (std::size_t i = first + 1; i < line.size(); ++i) {
         if (line[i] == '#' && (line[i - 1] == ' ' || line[i - 1] == '\t')) {
           line.erase(i);

@@ -91,7 +91,7 @@ void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFac
   std::fprintf(stderr,
                "aarad: warning: the %s back end ignores visibility, but in %s surfaces may hide one another (a "
                "vertex of group '%s' lies behind the plane of group '%s'), so its result has no shadows; it is exact "
-               "only inside one convex room\n",
+               "only where every surface lies on or in front of every other's plane\n",
                std::string(backend.name()).c_str(), scene.name.c_str(), group_of(witness->behind).c_str(),
                group_of(witness->front).c_str());
 }
