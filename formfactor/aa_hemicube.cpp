@@ -30,7 +30,7 @@ std::size_t AaHemicubeBackend::last_entries() const {
 }
 
 void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices,
-                                   FaceBuffers& b, std::vector<double>& sums) {
+                                   FaceBuffers& b, std::vector<double>& sums, UnoccludedList& unoccluded) {
   const FaceTask& t = tasks_[static_cast<std::size_t>(task)];
   const HemicubeFace face = t.face;
   // The task's viewport: columns [t.x0, t.x1) of the face, shifted to start at 0.
@@ -47,6 +47,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const int half_row = face != HemicubeFace::kTop && geometry_.resolution() % 2 != 0 ? height - 1 : -1;
   // Entries offered to the arena, counted in a local (a counter in memory would chain every insertion).
   std::size_t offered = 0;
+  // Delta form factors of the task's pixels, in the arena's column-major order.
+  const double* weight = column_weight_[static_cast<std::size_t>(face)].data() + static_cast<std::size_t>(t.x0) * height;
+  const auto column_height = static_cast<std::size_t>(height);
+  unoccluded.clear();
 
   for (std::size_t i = 0; i < receivers.size(); ++i) {
     if ((prepared_.face_mask(i) & bit) == 0 || !may_reach(t, geometry_.resolution(), prepared_.local_polygon(i)))
@@ -67,10 +71,12 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     const double reach = std::abs(depth.alpha) + std::abs(depth.beta);
     float spread = static_cast<float>(reach);
     if (spread < reach) spread = std::nextafter(spread, std::numeric_limits<float>::infinity());
+    double seen = 0.0;  // the receiver's factor in this task with nothing in front of it
     raster->rasterize(std::span<const Vec2>(b.projected.data(), m), [&](int x, int y, double coverage) {
       // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that
       // the walk's fractions refer to the area receivers can cover there.
       if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
+      seen += coverage * weight[static_cast<std::size_t>(x) * column_height + static_cast<std::size_t>(y)];
       const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
       double inverse_depth = depth.at(px, py);
       if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
@@ -79,10 +85,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       ++offered;
       arena.insert(x, y, CoverageEntry{-inverse_depth, coverage, receiver, surface, spread});
     });
+    if (seen > 0.0) unoccluded.emplace_back(receiver, seen);
   }
   task_entries_[static_cast<std::size_t>(task)] = offered;
   // Walk every list front to back, in the arena's column-major order.
-  const double* weight = column_weight_[static_cast<std::size_t>(face)].data() + static_cast<std::size_t>(t.x0) * height;
   // Consecutive contributions of one receiver (its interior runs down a column) are summed in a register and
   // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
   std::uint32_t run_receiver = 0;
@@ -107,9 +113,14 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
   run_face_tasks(tasks_, prepared_, [&](int task) {
     std::vector<double>& sums = task_sums_[static_cast<std::size_t>(task)];
     sums.assign(receivers.size(), 0.0);
-    shoot_task(task, receivers, max_vertices, buffers_.local(), sums);
+    shoot_task(task, receivers, max_vertices, buffers_.local(), sums, task_unoccluded_[static_cast<std::size_t>(task)]);
   });
   combine_face_sums(task_sums_, subset, out);
+}
+
+bool AaHemicubeBackend::add_unoccluded(std::span<double> out) const {
+  add_unoccluded_lists(task_unoccluded_, out);
+  return true;
 }
 
 }  // namespace aarad::formfactor

@@ -41,6 +41,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
   std::string_view name() const override { return "aa-hemicube"; }
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
+  bool add_unoccluded(std::span<double> out) const override;
 
   // Entries offered to the coverage arena by the last compute(), summed over faces (for benchmarks): every
   // covered pixel of every clipped receiver, including full entries kept inline and entries the arena refused.
@@ -55,7 +56,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
     std::vector<Vec2> projected;
   };
   void shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,
-                  std::vector<double>& sums);
+                  std::vector<double>& sums, UnoccludedList& unoccluded);
 
   HemicubeGeometry geometry_;
   // Delta form factors of every face in the arena's column-major order (pixel (x, y) at x * height + y).
@@ -63,6 +64,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
   PreparedReceivers prepared_;
   std::array<FaceTask, kTasks> tasks_;
   std::array<std::vector<double>, kTasks> task_sums_;
+  std::array<UnoccludedList, kTasks> task_unoccluded_;
   std::array<std::size_t, kTasks> task_entries_{};
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;
 };

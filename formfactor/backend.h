@@ -44,6 +44,15 @@ class FormFactorBackend {
   // out.size() == receivers.size(); entries outside the subset are left untouched.
   virtual void compute(const Shooter& shooter, const ReceiverView& receivers,
                        std::span<const std::uint32_t> subset, std::span<double> out) = 0;
+  // What the last compute() would have given each receiver it looked at had nothing occluded, on the same
+  // discretisation of the hemisphere (the same pixels and weights): adds it to out[i] (out.size() ==
+  // receivers.size()). The ratio of compute()'s factor to this one is the fraction of the receiver the back end
+  // saw, free of the back end's own discretisation error (refine/near_field.h uses it). Returns false, adding
+  // nothing, when the back end does not keep it.
+  virtual bool add_unoccluded(std::span<double> out) const {
+    (void)out;
+    return false;
+  }
 };
 
 // Creates the back end registered as `name` ("aa-hemicube", "hemicube", "analytic"); throws aarad::Error

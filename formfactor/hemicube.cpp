@@ -14,7 +14,7 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
 void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& receivers, std::size_t max_vertices,
-                                 FaceBuffers& b, std::vector<double>& sums) const {
+                                 FaceBuffers& b, std::vector<double>& sums, UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
   const int face_width = geometry_.width(face), width = task.x1 - task.x0, height = geometry_.height(face);
@@ -28,6 +28,8 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
   b.crossings.resize(clipped_capacity(max_vertices));
   const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
   auto sample_y = [this, face](int row) { return geometry_.sample_y(face, row); };
+  const std::span<const double> delta = geometry_.delta(face);
+  unoccluded.clear();
 
   for (std::size_t i = 0; i < receivers.size(); ++i) {
     if ((prepared_.face_mask(i) & bit) == 0 || !may_reach(task, geometry_.resolution(), prepared_.local_polygon(i)))
@@ -41,6 +43,7 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
       continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const auto item = static_cast<std::uint32_t>(i);
+    double seen = 0.0;  // the delta form factors of the receiver's samples, in front of it or not
     sample_polygon(std::span<const Vec2>(b.projected.data(), m), task.x0, task.x1, height, sample_y, b.crossings,
                    [&](int x, int y) {
                      // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
@@ -48,13 +51,14 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
                      if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
                      if (inverse_depth > box.hi) inverse_depth = box.hi;
                      const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
+                     seen += delta[static_cast<std::size_t>(y) * face_width + x];
                      if (inverse_depth > b.inverse_depth[p]) {
                        b.inverse_depth[p] = inverse_depth;
                        b.item[p] = item;
                      }
                    });
+    if (seen > 0.0) unoccluded.emplace_back(item, seen);
   }
-  const std::span<const double> delta = geometry_.delta(face);
   for (int y = 0; y < height; ++y) {
     const std::uint32_t* item = &b.item[static_cast<std::size_t>(y) * width];
     const double* row = &delta[static_cast<std::size_t>(y) * face_width + task.x0];
@@ -71,9 +75,15 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   run_face_tasks(tasks, prepared_, [&](int t) {
     std::vector<double>& sums = task_sums_[static_cast<std::size_t>(t)];
     sums.assign(receivers.size(), 0.0);
-    shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(), sums);
+    shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(), sums,
+               task_unoccluded_[static_cast<std::size_t>(t)]);
   });
   combine_face_sums(task_sums_, subset, out);
+}
+
+bool HemicubeBackend::add_unoccluded(std::span<double> out) const {
+  add_unoccluded_lists(task_unoccluded_, out);
+  return true;
 }
 
 }  // namespace aarad::formfactor

@@ -84,6 +84,7 @@ class HemicubeBackend final : public FormFactorBackend {
   std::string_view name() const override { return "hemicube"; }
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
+  bool add_unoccluded(std::span<double> out) const override;
 
  private:
   struct FaceBuffers {
@@ -94,11 +95,12 @@ class HemicubeBackend final : public FormFactorBackend {
     std::vector<ScanCrossing> crossings;
   };
   void shoot_task(const FaceTask& task, const ReceiverView& receivers, std::size_t max_vertices,
-                  FaceBuffers& buffers, std::vector<double>& sums) const;
+                  FaceBuffers& buffers, std::vector<double>& sums, UnoccludedList& unoccluded) const;
 
   HemicubeGeometry geometry_;
   PreparedReceivers prepared_;
   std::array<std::vector<double>, kFaceTasks> task_sums_;
+  std::array<UnoccludedList, kFaceTasks> task_unoccluded_;
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;
 };
 

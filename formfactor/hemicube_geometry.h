@@ -39,6 +39,7 @@
 #include <functional>
 #include <limits>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace aarad::formfactor {
@@ -251,6 +252,14 @@ inline bool may_reach(const FaceTask& task, int resolution, std::span<const Vec3
   for (const Vec3& q : local_polygon)
     if (left ? !(q.x > 0.0) : !(q.x < 0.0)) return true;
   return false;
+}
+
+// Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
+// add_unoccluded). Added up in task order, so the sums do not depend on the number of threads.
+using UnoccludedList = std::vector<std::pair<std::uint32_t, double>>;
+inline void add_unoccluded_lists(std::span<const UnoccludedList> lists, std::span<double> out) {
+  for (const UnoccludedList& list : lists)
+    for (const auto& [receiver, factor] : list) out[receiver] += factor;
 }
 
 // Runs run(k) for k = 0 .. kFaceTasks - 1 on the threads of the current TBB arena, the tasks of most receivers

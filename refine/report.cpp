@@ -77,6 +77,7 @@ nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violati
         {"relaxation", options.relaxation},
         {"overshoot", options.overshoot},
         {"shooter_samples", options.shooter_samples},
+        {"near_field", options.near_field},
         {"patch_size", meshing.patch_size},
         {"element_size", meshing.element_size},
         {"max_level", meshing.max_level},

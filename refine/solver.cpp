@@ -118,7 +118,8 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
       options_(options),
       hierarchy_(scene, options.meshing),
       backend_(std::move(backend)),
-      scene_diagonal_(scene.diagonal()) {
+      scene_diagonal_(scene.diagonal()),
+      near_field_(options.near_field) {
   if (!backend_) throw Error("solver: no form-factor back end");
   if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
   if (options_.max_shots < 0) throw Error("solver: --max-shots must be >= 0");
@@ -129,6 +130,7 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
   if (options_.shooter_samples < 1 || options_.shooter_samples > 64) {
     throw Error("solver: shooter samples must be in [1, 64]");
   }
+  if (!(options_.near_field >= 0.0)) throw Error("solver: --near-field must be >= 0");
   initialise();
 }
 
@@ -153,6 +155,18 @@ void Solver::initialise() {
   }
   absorbed_flux_ = Rgb{};
   incident_.assign(nodes, Rgb{});
+  // The near-field correction's table of patches, by patch id (the receivers' patch ids are the patches' nodes).
+  mesh::NodeId last_patch = 0;
+  for (mesh::NodeId patch : hierarchy_.patches()) last_patch = std::max(last_patch, patch);
+  std::vector<Vec3> centroids(hierarchy_.patches().empty() ? 0 : last_patch + 1, Vec3(0.0));
+  std::vector<double> radii(centroids.size(), -1.0);  // -1: no patch with this id
+  for (mesh::NodeId patch : hierarchy_.patches()) {
+    centroids[patch] = hierarchy_.centroid(patch);
+    radii[patch] = 0.0;
+    for (const Vec3& corner : hierarchy_.corners(patch))
+      radii[patch] = std::max(radii[patch], glm::length(corner - centroids[patch]));
+  }
+  near_field_.set_patches(centroids, radii);
 }
 
 Rgb Solver::unshot_flux() const {
@@ -194,9 +208,20 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   // point lies a rounding error in front of or behind its own plane; lifted, its own surface lies strictly
   // behind it, so the polygon containing the point never projects over the whole hemicube.
   const Vec3 lift = normal * (1e-9 * scene_diagonal_);
+  const Vec3 centroid = hierarchy_.centroid(shooter);
+  std::vector<Vec3> points;
+  std::vector<double> weights;
+  const bool near_field = near_field_.reach() > 0.0;
+  // With the near-field correction, the back end's factors with nothing occluding too (empty when it has none).
+  const auto take_unoccluded = [&](std::vector<double>& into) {
+    into.assign(ff_.size(), 0.0);
+    if (!backend_->add_unoccluded(into)) into.clear();
+  };
   if (options_.shooter_samples <= 1) {
-    backend_->compute(formfactor::Shooter::from_normal(hierarchy_.centroid(shooter) + lift, normal), cache_.view(),
-                      subset, ff_);
+    points.push_back(centroid + lift);
+    weights.push_back(1.0);
+    backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), subset, ff_);
+    if (near_field) take_unoccluded(unoccluded_);
   } else {
     const auto samples = patch_samples(hierarchy_.corners(shooter), options_.shooter_samples);
     ff_sample_.assign(ff_.size(), 0.0);
@@ -208,11 +233,26 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
       }
     };
     for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
+    if (near_field) unoccluded_.assign(ff_.size(), 0.0);
     for (const SamplePoint& sample : samples) {
-      backend_->compute(formfactor::Shooter::from_normal(sample.position + lift, normal), cache_.view(), subset,
-                        ff_sample_);
+      points.push_back(sample.position + lift);
+      weights.push_back(sample.weight);
+      backend_->compute(formfactor::Shooter::from_normal(points.back(), normal), cache_.view(), subset, ff_sample_);
       for_each_receiver([&](std::uint32_t i) { ff_[i] += sample.weight * ff_sample_[i]; });
+      if (near_field && !unoccluded_.empty()) {
+        take_unoccluded(unoccluded_sample_);
+        if (unoccluded_sample_.empty()) {
+          unoccluded_.clear();
+        } else {
+          for (std::size_t i = 0; i < unoccluded_.size(); ++i) unoccluded_[i] += sample.weight * unoccluded_sample_[i];
+        }
+      }
     }
+  }
+  if (near_field) {
+    const std::vector<Vec3> corners = hierarchy_.corners(shooter);
+    near_field_.apply({corners, centroid, normal, hierarchy_.area(shooter), points, weights, unoccluded_},
+                      cache_.view(), subset, ff_);
   }
   times_.form_factors += seconds_since(start);
 }
@@ -249,9 +289,13 @@ bool Solver::shoot_once() {
 
   hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
   // incident_ holds this shot's flux per node: clear what the previous shot wrote (not all nodes).
-  for (mesh::NodeId node : incident_written_) incident_[node] = Rgb{};
+  for (mesh::NodeId node : incident_written_) {
+    incident_[node] = Rgb{};
+    received_factor_[node] = 0.0;
+  }
   incident_written_.clear();
   incident_.resize(hierarchy_.node_count(), Rgb{});
+  received_factor_.resize(hierarchy_.node_count(), 0.0);
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   touched_.clear();
   const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces
@@ -262,6 +306,7 @@ bool Solver::shoot_once() {
     const Deposit& d = deposits_[i];  // receive(leaf, incident, 1) without the lookups
     const Rgb incident = shot_flux * ff_[i];
     incident_[d.leaf] = incident;
+    received_factor_[d.leaf] = ff_[i];
     incident_written_.push_back(d.leaf);
     deposit(d, incident, 1.0);
     touched_.push_back(static_cast<std::uint32_t>(i));
@@ -397,6 +442,7 @@ std::vector<mesh::NodeId> Solver::take_back_split_shares(std::span<const mesh::N
     if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
   }
   incident_.resize(hierarchy_.node_count(), Rgb{});
+  received_factor_.resize(hierarchy_.node_count(), 0.0);
   for (mesh::NodeId old_leaf : split_nodes) {
     if (old_leaf >= first_new) continue;
     receive(old_leaf, incident_[old_leaf], -1.0);
@@ -409,6 +455,36 @@ std::vector<mesh::NodeId> Solver::take_back_split_shares(std::span<const mesh::N
     hierarchy_.unshot(leaf) = Rgb{};
   }
   return new_leaves;
+}
+
+// The pieces of a split leaf tile it, so the back ends give them together what the leaf got (the AA hemicube to
+// rounding: pieces of one surface share their pixels); the near-field correction does not, as it reshapes with
+// the pieces' own centroids. The pieces of a leaf that has a corrected one are scaled to its factor, so the flux
+// taken back from the leaf is given out again in full: the balance holds through splits.
+void Solver::share_out_corrected_factors(mesh::NodeId first_new) {
+  const auto ancestor_of = [&](mesh::NodeId leaf) {
+    mesh::NodeId ancestor = leaf;  // the node that was a leaf when the shot was received
+    while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
+    return ancestor;
+  };
+  std::vector<mesh::NodeId> reshaped;  // split leaves with a corrected piece
+  for (std::uint32_t receiver : near_field_.last_corrected()) reshaped.push_back(ancestor_of(cache_.leaf(receiver)));
+  std::sort(reshaped.begin(), reshaped.end());
+  reshaped.erase(std::unique(reshaped.begin(), reshaped.end()), reshaped.end());
+  std::vector<double> total(reshaped.size(), 0.0);
+  const auto slot = [&](mesh::NodeId ancestor) {
+    const auto it = std::lower_bound(reshaped.begin(), reshaped.end(), ancestor);
+    return it != reshaped.end() && *it == ancestor ? static_cast<std::size_t>(it - reshaped.begin()) : reshaped.size();
+  };
+  for (std::uint32_t receiver : subset_) {
+    const std::size_t k = slot(ancestor_of(cache_.leaf(receiver)));
+    if (k < reshaped.size()) total[k] += ff_[receiver];
+  }
+  for (std::uint32_t receiver : subset_) {
+    const mesh::NodeId ancestor = ancestor_of(cache_.leaf(receiver));
+    const std::size_t k = slot(ancestor);
+    if (k < reshaped.size() && total[k] > 0.0) ff_[receiver] *= received_factor_[ancestor] / total[k];
+  }
 }
 
 void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
@@ -431,12 +507,14 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     if (!subset_.empty()) {
       ff_.assign(cache_.size(), 0.0);
       compute_form_factors(shooter, subset_);
+      if (!near_field_.last_corrected().empty()) share_out_corrected_factors(first_new);
     }
     start = Clock::now();
     for (mesh::NodeId leaf : new_leaves) {
       const std::uint32_t receiver = cache_.receiver(leaf);
       if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[receiver] > 0.0)) continue;
       incident_[leaf] = shot_flux * ff_[receiver];
+      received_factor_[leaf] = ff_[receiver];
       incident_written_.push_back(leaf);
       receive(leaf, incident_[leaf], 1.0);
     }

@@ -11,6 +11,7 @@
 #include "core/scene.h"
 #include "formfactor/backend.h"
 #include "mesh/hierarchy.h"
+#include "refine/near_field.h"
 #include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
 
@@ -43,6 +44,10 @@ struct SolverOptions {
   // method); n > 1 averages the back end's point factors over n x n points, approximating the
   // patch-to-element form factor (used to check the loop against closed-form patch-to-patch values).
   int shooter_samples = 1;
+  // Near-field correction (refine/near_field.h): receivers within this many patch radii of the shooting patch's
+  // centroid, and smaller than it, take the shape of their share from the patch's exact factor seen from their
+  // centroid; 0 turns it off (the paper's method: every factor from the shooting point).
+  double near_field = 4.0;
   mesh::MeshingOptions meshing;  // patch and element sizes, max level, min area, balance
 };
 
@@ -141,6 +146,9 @@ class Solver {
   std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves) const;
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
   std::vector<mesh::NodeId> take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new);
+  // After the near-field correction changed some of the new leaves' factors: scales the new leaves of every split
+  // leaf with a corrected piece so that together they get the factor it had received.
+  void share_out_corrected_factors(mesh::NodeId first_new);
   double largest_reflected_luminance() const;
   // |dB| per channel: with the patch's area, what chooses the shooter and what the unshot fraction sums.
   Rgb unshot_magnitude(mesh::NodeId patch) const;
@@ -156,7 +164,11 @@ class Solver {
 
   std::vector<double> ff_;         // per receiver: form factor of the current shot
   std::vector<double> ff_sample_;  // per receiver: one sample point's factors
+  NearFieldCorrection near_field_;
+  std::vector<double> unoccluded_;         // per receiver: the back end's factors with nothing occluding
+  std::vector<double> unoccluded_sample_;  // the same, for one sample point
   std::vector<Rgb> incident_;      // per NodeId: flux the node received in the current shot (leaves)
+  std::vector<double> received_factor_;  // per NodeId: the form factor behind incident_
   std::vector<mesh::NodeId> incident_written_;  // the nodes whose incident_ the current shot set
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;

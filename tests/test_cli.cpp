@@ -130,6 +130,7 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
       {"solve --element-size -2", "must be a finite number >= 0"}, {"solve --min-area nan", "must be a finite number >= 0"},
       {"solve --threads -1", "must be a whole number in [0, 1024]"}, {"solve --max-shots -3", "must be a whole number >= 0"},
       {"solve --relaxation nan", "must be a number in [1, 2)"},
+      {"solve --near-field -1", "must be a finite number >= 0"},  {"solve --near-field inf", "must be a finite number >= 0"},
       // Integer options: a fraction, an exponent or trailing letters is not a whole number, whatever its range.
       {"solve --max-level 1.5", "Value 1.5 must be a whole number in [1, 60]"},
       {"solve --max-shots 1e3", "Value 1e3 must be a whole number >= 0"},

@@ -277,6 +277,11 @@ void add_solve_command(CLI::App& app) {
                   "Gauss points per direction on the shooting patch (1: its centroid, as the paper)")
       ->check(whole_number_in(1, 64))
       ->capture_default_str();
+  cmd->add_option("--near-field", options->solver.near_field,
+                  "Receivers within this many patch radii of the shooting patch, and smaller than it, get the shape "
+                  "of their share from the patch's exact factor seen from them (0: off, the paper's method)")
+      ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
+      ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Worker threads (0: all cores) [0, 1024]")
       ->check(whole_number_in(0, 1024))
       ->capture_default_str();

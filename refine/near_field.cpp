@@ -1,0 +1,164 @@
+// The near-field correction of a shot (see near_field.h): Wallace, Elmquist and Haines 1989, section 3, for the
+// receiver's side; Baum, Rushmeier and Winget 1989, eq. 9, for the point-to-polygon factors.
+#include "refine/near_field.h"
+
+#include "formfactor/analytic.h"
+#include "formfactor/hemicube_geometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace aarad::refine {
+namespace {
+
+// A receiver is corrected when its radius is at most this times the shooting patch's.
+constexpr double kSmaller = 0.75;
+// The far receivers of a shot are scaled by at most this factor (or its inverse) to keep the shot's total.
+constexpr double kFarChange = 1.25;
+
+// The unoccluded factor from the differential area at `point` with unit normal `normal` to the part of `polygon`
+// in front of it. `local` and `clipped` are scratch.
+double unoccluded_factor(const Vec3& point, const Vec3& normal, std::span<const Vec3> polygon,
+                         std::vector<Vec3>& local, std::vector<Vec3>& clipped) {
+  const formfactor::Shooter frame = formfactor::Shooter::from_normal(point, normal);
+  local.resize(polygon.size());
+  clipped.resize(polygon.size() + 1);
+  bool behind = false, in_front = false;
+  for (std::size_t v = 0; v < polygon.size(); ++v) {
+    local[v] = formfactor::to_local(frame, polygon[v]);
+    behind |= local[v].z < 0.0;
+    in_front |= local[v].z > 0.0;
+  }
+  if (!in_front) return 0.0;
+  std::span<const Vec3> visible = local;
+  if (behind) visible = std::span<const Vec3>(clipped.data(), formfactor::clip_to_front(local, clipped));
+  return std::max(0.0, formfactor::polygon_form_factor(Vec3(0.0), Vec3(0.0, 0.0, 1.0), visible));
+}
+
+// Area and area centroid of a planar polygon, convex or not: a fan of triangles from its first corner, each
+// triangle's area signed along the polygon's normal so that the parts outside a reflex corner cancel.
+void area_and_centroid(std::span<const Vec3> polygon, double& area, Vec3& centroid) {
+  Vec3 normal(0.0);
+  for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
+    normal += glm::cross(polygon[k] - polygon[0], polygon[k + 1] - polygon[0]);
+  const double twice_area = glm::length(normal);
+  area = 0.5 * twice_area;
+  centroid = polygon.empty() ? Vec3(0.0) : polygon[0];
+  if (!(twice_area > 0.0)) return;
+  const Vec3 unit = normal / twice_area;
+  Vec3 sum(0.0);
+  for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
+    const double signed_twice = glm::dot(glm::cross(polygon[k] - polygon[0], polygon[k + 1] - polygon[0]), unit);
+    sum += signed_twice * ((polygon[0] + polygon[k] + polygon[k + 1]) / 3.0);
+  }
+  centroid = sum / twice_area;
+}
+
+}  // namespace
+
+void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span<const double> radii) {
+  patch_centroid_.assign(centroids.begin(), centroids.end());
+  patch_radius_.assign(radii.begin(), radii.end());
+  near_patch_.assign(patch_centroid_.size(), 0);
+}
+
+void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
+                                std::span<const std::uint32_t> subset, std::span<double> ff) {
+  near_.clear();
+  shaped_.clear();
+  const bool whole_shot = subset.empty();
+  if (whole_shot) {
+    scale_ = 1.0;
+    far_scale_ = 1.0;
+  }
+  if (!(reach_ > 0.0) || !(shooter.area > 0.0)) return;
+  double radius = 0.0;
+  for (const Vec3& corner : shooter.polygon) radius = std::max(radius, glm::length(corner - shooter.centroid));
+  const double near_distance = reach_ * radius;
+  const double near_squared = near_distance * near_distance;
+
+  // The patches that may hold a receiver whose centroid is near: every point of a patch lies within its radius
+  // of its centroid.
+  const bool by_patch = !patch_centroid_.empty();
+  for (std::uint32_t p : near_patches_) near_patch_[p] = 0;
+  near_patches_.clear();
+  for (std::uint32_t p = 0; by_patch && p < patch_centroid_.size(); ++p) {
+    if (patch_radius_[p] < 0.0) continue;  // no patch has this id
+    const double within = near_distance + patch_radius_[p];
+    const Vec3 d = patch_centroid_[p] - shooter.centroid;
+    if (glm::dot(d, d) <= within * within) {
+      near_patch_[p] = 1;
+      near_patches_.push_back(p);
+    }
+  }
+
+  const std::size_t count = whole_shot ? receivers.size() : subset.size();
+  double back_end_total = 0.0, shaped_total = 0.0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint32_t i = whole_shot ? static_cast<std::uint32_t>(k) : subset[k];
+    if (!(ff[i] > 0.0)) continue;  // hidden, culled or behind: nothing to shape
+    if (by_patch && (receivers.patch(i) >= near_patch_.size() || near_patch_[receivers.patch(i)] == 0)) continue;
+    const std::span<const Vec3> polygon = receivers.polygon(i);
+    double area;
+    Vec3 centroid;
+    area_and_centroid(polygon, area, centroid);
+    const Vec3 d = centroid - shooter.centroid;
+    if (!(glm::dot(d, d) < near_squared) || !(area > 0.0)) continue;
+    // Only receivers clearly smaller than the patch: for them the centroid stands for the whole better than the
+    // patch's centroid stands for the patch.
+    double receiver_radius = 0.0;
+    for (const Vec3& corner : polygon) receiver_radius = std::max(receiver_radius, glm::length(corner - centroid));
+    if (!(receiver_radius <= kSmaller * radius)) continue;
+    // What the back end saw of the receiver: its factor over the factor it would have had with nothing in front.
+    double unoccluded = 0.0;
+    if (!shooter.unoccluded.empty()) {
+      unoccluded = shooter.unoccluded[i];
+    } else {
+      for (std::size_t p = 0; p < shooter.points.size(); ++p)
+        unoccluded += shooter.weights[p] * unoccluded_factor(shooter.points[p], shooter.normal, polygon, local_, clipped_);
+    }
+    const double seen = unoccluded > 0.0 ? std::min(1.0, ff[i] / unoccluded) : 1.0;
+    const double from_receiver =
+        unoccluded_factor(centroid, receivers.plane(i).normal, shooter.polygon, local_, clipped_);
+    near_.push_back(i);
+    shaped_.push_back(seen * from_receiver * area / shooter.area);
+    back_end_total += ff[i];
+    shaped_total += shaped_.back();
+  }
+  if (whole_shot) {
+    if (!(shaped_total > 0.0)) {
+      near_.clear();
+      return;
+    }
+    // The shot's total stays what the back end sent. The far receivers take up the near field's change, all in
+    // the same proportion, unless that would change them by more than kFarChange (a near field that is most of
+    // what the patch sees: its total is then kept instead, and the far receivers are left alone).
+    double shot_total = 0.0;
+    for (double f : ff) shot_total += f > 0.0 ? f : 0.0;
+    const double far_before = shot_total - back_end_total, far_after = shot_total - shaped_total;
+    const double far_scale = far_before > 0.0 ? far_after / far_before : 0.0;
+    if (far_scale >= 1.0 / kFarChange && far_scale <= kFarChange) {
+      far_scale_ = far_scale;
+    } else {
+      scale_ = back_end_total / shaped_total;
+    }
+  }
+  near_flag_.resize(ff.size(), 0);
+  for (std::size_t k = 0; k < near_.size(); ++k) {
+    ff[near_[k]] = scale_ * shaped_[k];
+    near_flag_[near_[k]] = 1;
+  }
+  if (far_scale_ != 1.0) {
+    const auto scale_far = [&](std::uint32_t i) {
+      if (near_flag_[i] == 0 && ff[i] > 0.0) ff[i] *= far_scale_;
+    };
+    if (whole_shot) {
+      for (std::uint32_t i = 0; i < ff.size(); ++i) scale_far(i);
+    } else {
+      for (std::uint32_t i : subset) scale_far(i);
+    }
+  }
+  for (std::uint32_t i : near_) near_flag_[i] = 0;
+}
+
+}  // namespace aarad::refine

@@ -1,0 +1,100 @@
+// The near-field correction of a shot: the shooting patch as its nearby receivers see it.
+//
+// A hemicube shoots from a point of the patch (its centroid, or a few Gauss points) and so gives the
+// point-to-element factor F(dA_s -> e), where progressive refinement needs the patch-to-element factor
+// F(A_s -> e) (Cohen, Chen, Wallace and Greenberg 1988, section 3). The two agree when the element is far from
+// the patch compared with the patch's size; near it they do not. An element on a wall, just above a floor patch
+// it meets, has half its hemisphere filled by that patch, while the patch's centroid sees the element edge on:
+// F(dA_s -> e) tends to 0 at the junction and F(A_s -> e) does not. Every junction comes out dark, and adaptive
+// substructuring follows that error instead of the radiosity: in the furnace, whose exact answer is flat, it cut
+// the wall junctions down to the deepest level.
+//
+// The correction takes the receiver's side for the receivers near the patch, as Wallace, Elmquist and Haines
+// ("A ray tracing algorithm for progressive radiosity", SIGGRAPH 1989, section 3) do for all receivers: by
+// reciprocity F(A_s -> e) = F(A_e -> A_s) A_e / A_s, and for a small element F(A_e -> A_s) is the exact
+// point-to-polygon factor from its centroid to the patch (Baum, Rushmeier and Winget 1989, eq. 9). The receiver's
+// centroid stands for the receiver better than the patch's centroid stands for the patch when the receiver is the
+// smaller of the two, even where they touch. So a receiver e whose centroid lies within `reach` times the patch's
+// radius (its farthest corner from its centroid) of the patch's centroid, and whose own radius is at most 3/4 of
+// the patch's, gets
+//     G_e = v_e F(dA_e -> A_s) A_e / A_s,
+// where v_e, the fraction of e the back end saw, is its factor over its factor with nothing occluding on the same
+// pixels (FormFactorBackend::add_unoccluded; exact when the back end cannot say), clamped to [0, 1], so the back
+// end's occlusion is kept and its discretisation error is not (the AA hemicube gives an element at a junction,
+// seen edge on through the bottom row of a side face, about half its factor: the cosine kernel, zero at the
+// horizon, varies by a factor of two across that row).
+//
+// Energy. The shot's total stays what the back end sent (a closed scene stays balanced to the bit). The near
+// field's total changes (a unit floor patch sends 0.2000 to the unit wall it meets; its centroid, 0.1901), and
+// the far receivers, whose factors the centroid gives well one by one, take up the difference all in the same
+// proportion: in a closed scene the patch's factors add up to 1, so what the centroid gave the near field too
+// little it gave the far field too much. When that would change the far field by more than a quarter (a patch
+// that sees mostly its near field), the near receivers are instead scaled to the total the back end gave them,
+// and the far ones are left alone. Receivers added by substructuring in the same shot are scaled like those of
+// the whole shot; the solver then scales the pieces of each split receiver so that they share what it had
+// received (refine/solver.cpp), which keeps the balance through splits too.
+#pragma once
+
+#include "core/math.h"
+#include "formfactor/backend.h"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace aarad::refine {
+
+// The patch that shoots, and the points the back end shot from.
+struct NearFieldShooter {
+  std::span<const Vec3> polygon;  // the patch, counter-clockwise seen from its front
+  Vec3 centroid{0.0};
+  Vec3 normal{0.0, 0.0, 1.0};
+  double area = 0.0;
+  std::span<const Vec3> points;    // where the back end shot from
+  std::span<const double> weights;  // the points' weights, summing to 1
+  // Per receiver, what the back end would have given it with nothing occluding (FormFactorBackend::
+  // add_unoccluded, weighted over the points like the factors), or empty when the back end does not say: then the
+  // exact unoccluded factors from the points stand in for it.
+  std::span<const double> unoccluded;
+};
+
+class NearFieldCorrection {
+ public:
+  // Receivers whose centroid is within reach x the patch's radius (its farthest corner from its centroid) of
+  // the patch's centroid are corrected; reach <= 0 turns the correction off.
+  explicit NearFieldCorrection(double reach) : reach_(reach) {}
+
+  double reach() const { return reach_; }
+
+  // The patches of the receivers, by the view's patch id: each one's centroid and the distance from it to its
+  // farthest corner. With them a shot looks only at receivers of patches that reach its near field; without
+  // (empty spans), at every receiver.
+  void set_patches(std::span<const Vec3> centroids, std::span<const double> radii);
+
+  // Rewrites ff[i] for the near receivers among `subset` (all receivers when it is empty: a whole shot, which
+  // sets the scale that later subsets of the same shot use). ff holds the back end's factors from the shooter.
+  void apply(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
+             std::span<const std::uint32_t> subset, std::span<double> ff);
+
+  // Receivers the last apply() corrected.
+  std::span<const std::uint32_t> last_corrected() const { return near_; }
+  // The factors of the last whole shot: the near receivers' (1 unless the far field could not take up their
+  // change) and the far receivers' (1 when there was no near receiver).
+  double near_scale() const { return scale_; }
+  double far_scale() const { return far_scale_; }
+
+ private:
+  double reach_;
+  double scale_ = 1.0;
+  double far_scale_ = 1.0;
+  std::vector<Vec3> patch_centroid_;
+  std::vector<double> patch_radius_;
+  std::vector<std::uint8_t> near_patch_;  // per patch id: 1 when it may hold near receivers (this shot)
+  std::vector<std::uint32_t> near_patches_;
+  std::vector<std::uint32_t> near_;
+  std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)
+  std::vector<double> shaped_;  // per near receiver: G
+  std::vector<Vec3> local_, clipped_;
+};
+
+}  // namespace aarad::refine

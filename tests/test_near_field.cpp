@@ -1,0 +1,252 @@
+// The near-field correction (refine/near_field.h): a unit floor patch shooting into the wall it meets, cut into
+// small elements, against the patch-to-element factors F(A_s -> e) integrated from the elements' side; the shot's
+// total kept; receivers far away or as large as the patch only scaled; occlusion kept.
+#include "formfactor/analytic.h"
+#include "formfactor/backend.h"
+#include "refine/near_field.h"
+#include "tests/formfactor_fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+namespace aarad::refine {
+namespace {
+
+using formfactor::ReceiverView;
+using formfactor::testing::Polygon;
+using formfactor::testing::add_surface;
+using formfactor::testing::grid;
+using formfactor::testing::rectangle;
+
+// Gauss-Legendre nodes and weights on [0, 1] (Newton on P_n).
+void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
+  nodes.assign(static_cast<std::size_t>(n), 0.0);
+  weights.assign(static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    double x = std::cos(kPi * (i + 0.75) / (n + 0.5)), derivative = 1.0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      double p0 = 1.0, p1 = 0.0;
+      for (int k = 1; k <= n; ++k) {
+        const double p2 = p1;
+        p1 = p0;
+        p0 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p2) / k;
+      }
+      derivative = n * (x * p0 - p1) / (x * x - 1.0);
+      const double step = p0 / derivative;
+      x -= step;
+      if (std::abs(step) < 1e-15) break;
+    }
+    nodes[static_cast<std::size_t>(i)] = 0.5 * (1.0 - x);
+    weights[static_cast<std::size_t>(i)] = 1.0 / ((1.0 - x * x) * derivative * derivative);
+  }
+}
+
+// F(A_s -> e) for the rectangle e = origin + [0, 1] e1 + [0, 1] e2 with unit normal `normal`, by reciprocity
+// from e's side: (1 / A_s) integral over e of the exact point-to-polygon factor to the patch (Baum et al. eq. 9),
+// with 12 x 12 Gauss points (the integrand is smooth over e: at most 1/2, at a junction).
+double patch_to_element(const Polygon& patch, double patch_area, const Vec3& origin, const Vec3& e1, const Vec3& e2,
+                        const Vec3& normal) {
+  std::vector<double> nodes, weights;
+  gauss_legendre(12, nodes, weights);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    for (std::size_t j = 0; j < nodes.size(); ++j)
+      sum += weights[i] * weights[j] *
+             formfactor::polygon_form_factor(origin + nodes[i] * e1 + nodes[j] * e2, normal, patch);
+  return sum * glm::length(glm::cross(e1, e2)) / patch_area;
+}
+
+struct Junction {
+  Polygon floor = rectangle(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0));  // the shooting patch, facing +z
+  Vec3 centroid{0.5, 0.5, 0.0};
+  Vec3 normal{0.0, 0.0, 1.0};
+  ReceiverView view;
+  std::vector<std::uint32_t> wall, ceiling;
+  int n = 8;
+
+  // The wall x = 1 (facing -x) meets the floor along its edge; the ceiling z = 4 (facing down, 2 x 2 pieces of
+  // 20 x 20) is far away and takes most of what the patch sends, as in a room.
+  Junction() {
+    wall = add_surface(view, grid(Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 0), n, n), 1, 10);
+    ceiling = add_surface(view, grid(Vec3(-19.5, -19.5, 4), Vec3(0, 40, 0), Vec3(40, 0, 0), 2, 2), 2, 200);
+  }
+  // The back end's factors from the patch's centroid (lifted off the floor, as the solver does).
+  std::vector<double> shoot(formfactor::FormFactorBackend& backend) const {
+    std::vector<double> ff(view.size(), 0.0);
+    backend.compute(formfactor::Shooter::from_normal(centroid + Vec3(0, 0, 1e-9), normal), view, {}, ff);
+    return ff;
+  }
+  NearFieldShooter shooter(std::span<const Vec3> points, std::span<const double> weights) const {
+    return {floor, centroid, normal, 1.0, points, weights, {}};
+  }
+  // F(A_s -> e) for the wall element in row i (along z) and column j (along y).
+  double exact(int i, int j) const {
+    const double h = 1.0 / n;
+    return patch_to_element(floor, 1.0, Vec3(1, j * h, i * h), Vec3(0, 0, h), Vec3(0, h, 0), Vec3(-1, 0, 0));
+  }
+};
+
+TEST(NearField, JunctionElementsGetThePatchFactorNotTheCentroids) {
+  Junction scene;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> before = scene.shoot(backend);
+  std::vector<double> after = before;
+  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
+  const std::vector<double> weights = {1.0};
+  NearFieldCorrection correction(4.0);
+  correction.apply(scene.shooter(points, weights), scene.view, {}, after);
+  EXPECT_EQ(correction.last_corrected().size(), scene.wall.size());
+
+  // Row i = 0 touches the floor: seen edge on from the centroid, it gets far too little; rows above get too much.
+  std::vector<double> exact(scene.wall.size());
+  double exact_total = 0.0, total = 0.0;
+  for (int i = 0; i < scene.n; ++i) {
+    for (int j = 0; j < scene.n; ++j) {
+      const auto k = static_cast<std::size_t>(j * scene.n + i);  // grid(): along z first
+      exact[k] = scene.exact(i, j);
+      exact_total += exact[k];
+      total += after[scene.wall[k]];
+    }
+  }
+  // The pieces add up to the closed form for two unit squares at right angles (Howell C-14): 0.2000438.
+  EXPECT_NEAR(exact_total, 0.2000438, 2e-7);
+  double worst_before = 0.0, worst_after = 0.0, worst_row0_before = 0.0, worst_shape = 0.0;
+  for (int i = 0; i < scene.n; ++i) {
+    for (int j = 0; j < scene.n; ++j) {
+      const auto k = static_cast<std::size_t>(j * scene.n + i);
+      const std::uint32_t r = scene.wall[k];
+      worst_shape = std::max(worst_shape, std::abs((after[r] / total) / (exact[k] / exact_total) - 1.0));
+      const double error_before = std::abs(before[r] / exact[k] - 1.0);
+      const double error_after = std::abs(after[r] / exact[k] - 1.0);
+      worst_before = std::max(worst_before, error_before);
+      worst_after = std::max(worst_after, error_after);
+      if (i == 0) worst_row0_before = std::max(worst_row0_before, error_before);
+    }
+  }
+  std::printf("wall of 8 x 8 next to a unit floor patch: worst relative error of F(A_s -> e) %.4f from the centroid, "
+              "%.4f corrected (row at the junction %.4f from the centroid); the wall's total corrected %.6f, exact "
+              "%.6f; worst error of the shape (factor / total) %.4f\n",
+              worst_before, worst_after, worst_row0_before, total, exact_total, worst_shape);
+  EXPECT_GT(worst_row0_before, 0.3);
+  EXPECT_LT(worst_after, 0.005);
+}
+
+TEST(NearField, KeepsTheShotsTotalAndScalesFarOrLargeReceiversAlike) {
+  Junction scene;
+  // A receiver as large as the patch next to it: its centroid is no better than the patch's, so it is not
+  // reshaped (it is scaled with the far receivers).
+  const std::uint32_t large = add_surface(scene.view, {rectangle(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0))},
+                                          3, 300).front();  // the wall y = 0, facing +y
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> before = scene.shoot(backend);
+  std::vector<double> after = before;
+  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
+  const std::vector<double> weights = {1.0};
+  NearFieldCorrection correction(4.0);
+  correction.apply(scene.shooter(points, weights), scene.view, {}, after);
+  EXPECT_EQ(correction.last_corrected().size(), scene.wall.size());
+  double total_before = 0.0, total_after = 0.0, near_before = 0.0, near_after = 0.0;
+  for (std::size_t r = 0; r < before.size(); ++r) {
+    total_before += before[r];
+    total_after += after[r];
+  }
+  for (std::uint32_t r : scene.wall) {
+    near_before += before[r];
+    near_after += after[r];
+  }
+  EXPECT_NEAR(total_after, total_before, 1e-15);
+  // The far receivers (the ceiling and the large wall) give up what the near field gained, in proportion.
+  const double far_scale = (total_before - near_after) / (total_before - near_before);
+  EXPECT_LT(far_scale, 1.0);
+  EXPECT_DOUBLE_EQ(correction.far_scale(), far_scale);
+  EXPECT_EQ(correction.near_scale(), 1.0);
+  for (std::uint32_t r : scene.ceiling) {
+    EXPECT_GT(before[r], 0.0);
+    EXPECT_DOUBLE_EQ(after[r], before[r] * far_scale);
+  }
+  EXPECT_GT(before[large], 0.0);
+  EXPECT_DOUBLE_EQ(after[large], before[large] * far_scale);
+  // Off, nothing changes.
+  std::vector<double> off = before;
+  NearFieldCorrection(0.0).apply(scene.shooter(points, weights), scene.view, {}, off);
+  EXPECT_EQ(off, before);
+}
+
+TEST(NearField, WithoutAFarFieldTheNearFieldKeepsItsTotal) {
+  // Only the wall: there is nothing far to take up the change, so the near receivers share what they got.
+  Junction scene;
+  ReceiverView wall_only;
+  add_surface(wall_only, grid(Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 0), scene.n, scene.n), 1, 10);
+  scene.view = wall_only;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> before = scene.shoot(backend);
+  std::vector<double> after = before;
+  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
+  const std::vector<double> weights = {1.0};
+  NearFieldCorrection correction(4.0);
+  correction.apply(scene.shooter(points, weights), scene.view, {}, after);
+  double sum_before = 0.0, sum_after = 0.0;
+  for (std::size_t r = 0; r < before.size(); ++r) {
+    sum_before += before[r];
+    sum_after += after[r];
+  }
+  EXPECT_NEAR(sum_after, sum_before, 1e-15);
+  EXPECT_EQ(correction.far_scale(), 1.0);
+  EXPECT_GT(correction.near_scale(), 0.9);
+  EXPECT_LT(correction.near_scale(), 1.0);
+}
+
+TEST(NearField, AaHemicubeSeesAJunctionWhole) {
+  // The AA hemicube's factor for an element seen edge on through a side face's bottom row is off by up to a factor
+  // of two (the cosine kernel is zero at the horizon), but the same pixels with nothing occluding are off alike:
+  // the fraction it saw is 1, and the corrected factors are those of the exact back end.
+  Junction scene;
+  auto aa = formfactor::make_backend("aa-hemicube", {100});
+  formfactor::AnalyticBackend exact_backend;
+  std::vector<double> aa_ff = scene.shoot(*aa), exact_ff = scene.shoot(exact_backend);
+  std::vector<double> unoccluded(scene.view.size(), 0.0);
+  ASSERT_TRUE(aa->add_unoccluded(unoccluded));
+  for (std::uint32_t r : scene.wall) EXPECT_NEAR(unoccluded[r], aa_ff[r], 1e-12 * aa_ff[r]) << r;  // nothing in front
+  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
+  const std::vector<double> weights = {1.0};
+  NearFieldShooter shooter = scene.shooter(points, weights);
+  NearFieldCorrection correction(4.0);
+  correction.apply(shooter, scene.view, {}, exact_ff);
+  shooter.unoccluded = unoccluded;
+  correction.apply(shooter, scene.view, {}, aa_ff);
+  for (std::uint32_t r : scene.wall) EXPECT_NEAR(aa_ff[r], exact_ff[r], 1e-12 * exact_ff[r]) << r;
+}
+
+TEST(NearField, HiddenPartsStayHidden) {
+  // A screen between the floor's centroid and the lower half of the wall: those elements get nothing from the
+  // AA hemicube, and the correction gives them nothing either; the upper half is reshaped as before.
+  Junction scene;
+  add_surface(scene.view, {rectangle(Vec3(0.9, -1, 0), Vec3(0, 0, 0.45), Vec3(0, 3, 0))}, 4, 400);  // facing -x
+  auto aa = formfactor::make_backend("aa-hemicube", {100});
+  std::vector<double> ff = scene.shoot(*aa);
+  std::vector<double> unoccluded(scene.view.size(), 0.0);
+  ASSERT_TRUE(aa->add_unoccluded(unoccluded));
+  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
+  const std::vector<double> weights = {1.0};
+  NearFieldShooter shooter = scene.shooter(points, weights);
+  shooter.unoccluded = unoccluded;
+  NearFieldCorrection correction(4.0);
+  correction.apply(shooter, scene.view, {}, ff);
+  for (int i = 0; i < scene.n; ++i) {
+    for (int j = 0; j < scene.n; ++j) {
+      const std::uint32_t r = scene.wall[static_cast<std::size_t>(j * scene.n + i)];  // grid(): along z first
+      // The screen's top edge, seen from (0.5, 0.5, 0), hides the wall below z = 0.45 x 0.5 / 0.4 = 0.5625.
+      if ((i + 1) / 8.0 <= 0.5) {
+        EXPECT_NEAR(ff[r], 0.0, 1e-15) << i << " " << j;
+      } else if (i / 8.0 >= 0.6) {
+        EXPECT_GT(ff[r], 0.0) << i << " " << j;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace aarad::refine
