@@ -2,6 +2,7 @@
 // receiver's side; Baum, Rushmeier and Winget 1989, eq. 9, for the point-to-polygon factors.
 #include "refine/near_field.h"
 
+#include "core/polygon.h"
 #include "formfactor/analytic.h"
 #include "formfactor/hemicube_geometry.h"
 
@@ -33,25 +34,6 @@ double unoccluded_factor(const Vec3& point, const Vec3& normal, std::span<const 
   std::span<const Vec3> visible = local;
   if (behind) visible = std::span<const Vec3>(clipped.data(), formfactor::clip_to_front(local, clipped));
   return std::max(0.0, formfactor::polygon_form_factor(Vec3(0.0), Vec3(0.0, 0.0, 1.0), visible));
-}
-
-// Area and area centroid of a planar polygon, convex or not: a fan of triangles from its first corner, each
-// triangle's area signed along the polygon's normal so that the parts outside a reflex corner cancel.
-void area_and_centroid(std::span<const Vec3> polygon, double& area, Vec3& centroid) {
-  Vec3 normal(0.0);
-  for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
-    normal += glm::cross(polygon[k] - polygon[0], polygon[k + 1] - polygon[0]);
-  const double twice_area = glm::length(normal);
-  area = 0.5 * twice_area;
-  centroid = polygon.empty() ? Vec3(0.0) : polygon[0];
-  if (!(twice_area > 0.0)) return;
-  const Vec3 unit = normal / twice_area;
-  Vec3 sum(0.0);
-  for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
-    const double signed_twice = glm::dot(glm::cross(polygon[k] - polygon[0], polygon[k + 1] - polygon[0]), unit);
-    sum += signed_twice * ((polygon[0] + polygon[k] + polygon[k + 1]) / 3.0);
-  }
-  centroid = sum / twice_area;
 }
 
 }  // namespace
@@ -99,9 +81,8 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
     if (!(ff[i] > 0.0)) continue;  // hidden, culled or behind: nothing to shape
     if (by_patch && (receivers.patch(i) >= near_patch_.size() || near_patch_[receivers.patch(i)] == 0)) continue;
     const std::span<const Vec3> polygon = receivers.polygon(i);
-    double area;
-    Vec3 centroid;
-    area_and_centroid(polygon, area, centroid);
+    const double area = aarad::area(polygon);
+    const Vec3 centroid = aarad::centroid(polygon);
     const Vec3 d = centroid - shooter.centroid;
     if (!(glm::dot(d, d) < near_squared) || !(area > 0.0)) continue;
     // Only receivers clearly smaller than the patch: for them the centroid stands for the whole better than the
