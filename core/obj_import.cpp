@@ -382,37 +382,6 @@ Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* ent
   return m;
 }
 
-// Ear clipping of a simple polygon given counter-clockwise in 2D. Appends index triples (counter-clockwise)
-// to `triangles`. Vertices where the boundary goes straight on are clipped like any other ear; the
-// resulting zero-area triangles are dropped by the caller.
-void ear_clip(const std::vector<Vec2>& p, std::vector<std::array<std::size_t, 3>>& triangles) {
-  std::vector<std::size_t> remaining(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) remaining[i] = i;
-  while (remaining.size() > 3) {
-    const std::size_t n = remaining.size();
-    std::optional<std::size_t> ear;
-    for (std::size_t k = 0; k < n && !ear; ++k) {
-      const std::size_t a = remaining[(k + n - 1) % n], b = remaining[k], c = remaining[(k + 1) % n];
-      if (orientation(p[a], p[b], p[c]) != Sign::kPositive) continue;
-      bool empty = true;
-      for (const std::size_t q : remaining) {
-        if (q == a || q == b || q == c || p[q] == p[a] || p[q] == p[b] || p[q] == p[c]) continue;
-        if (orientation(p[a], p[b], p[q]) != Sign::kNegative && orientation(p[b], p[c], p[q]) != Sign::kNegative &&
-            orientation(p[c], p[a], p[q]) != Sign::kNegative) {
-          empty = false;
-          break;
-        }
-      }
-      if (empty) ear = k;
-    }
-    // A simple polygon always has an ear (Meisters' two-ears theorem); only straight runs remain otherwise.
-    const std::size_t k = ear.value_or(0);
-    triangles.push_back({remaining[(k + n - 1) % n], remaining[k], remaining[(k + 1) % n]});
-    remaining.erase(remaining.begin() + static_cast<std::ptrdiff_t>(k));
-  }
-  triangles.push_back({remaining[0], remaining[1], remaining[2]});
-}
-
 // Checks one face and returns the polygons to add: none (skipped), the face itself, or its triangles.
 std::vector<std::vector<Vec3>> checked_face(std::vector<Vec3> v, const std::string& path, int line,
                                             std::vector<std::string>& warnings) {
@@ -486,6 +455,35 @@ std::vector<std::vector<Vec3>> checked_face(std::vector<Vec3> v, const std::stri
                       number_text(kPlanarity) + " of its size); split into " + std::to_string(out.size()) +
                       " triangles. Make the face planar or split it yourself to silence this"));
   return out;
+}
+
+// Faces laid on one another in one plane (a rug on a floor, a face copied into a second group): both are lit
+// there and both count the area, where in the real scene one hides the other.
+void warn_about_overlaps(const Scene& scene, const std::string& path, std::vector<std::string>& warnings) {
+  constexpr std::size_t kMostWarnings = 10;
+  const std::vector<Scene::CoplanarOverlap> overlaps = scene.coplanar_overlaps();
+  const auto name = [&](std::uint32_t surface) {
+    const Surface& s = scene.surfaces[surface];
+    return "'" + scene.groups[s.group].name + "' (material '" + scene.materials[s.material].name + "')";
+  };
+  for (std::size_t k = 0; k < overlaps.size() && k < kMostWarnings; ++k) {
+    const Scene::CoplanarOverlap& o = overlaps[k];
+    const std::string amount = "an area of " + number_text(o.area);
+    const std::string lines = "lines " + std::to_string(o.line_a) + " and " + std::to_string(o.line_b);
+    if (o.a == o.b) {
+      warnings.push_back(InputError::format(
+          path, o.line_a, "faces of " + name(o.a) + " overlap each other over " + amount + " (" + lines +
+                              " overlap most): that area is lit and counted twice; remove the overlap"));
+    } else {
+      warnings.push_back(InputError::format(
+          path, o.line_a, name(o.a) + " and " + name(o.b) + " lie on one another in one plane over " + amount +
+                              " (" + lines + " overlap most): both are lit there and both count that area, where "
+                              "one would hide the other; cut one out of the other, or move one off the plane"));
+    }
+  }
+  if (overlaps.size() > kMostWarnings)
+    warnings.push_back(InputError::format(path, 0, std::to_string(overlaps.size() - kMostWarnings) +
+                                                       " more pairs of surfaces overlap in one plane"));
 }
 
 }  // namespace
@@ -627,6 +625,7 @@ Scene import_obj(const std::string& obj_path) {
   scene.camera = text.camera;
   scene.meshing = text.meshing;
   scene.build_surfaces();
+  warn_about_overlaps(scene, obj_path, warnings);
   bool emits = false;
   for (const Face& face : scene.faces) emits |= scene.materials[face.material].emits();
   if (!emits)

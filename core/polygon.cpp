@@ -129,4 +129,58 @@ void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2>
   }
 }
 
+void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& triangles) {
+  if (p.size() < 3) return;
+  std::vector<std::size_t> remaining(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) remaining[i] = i;
+  while (remaining.size() > 3) {
+    const std::size_t n = remaining.size();
+    std::size_t ear = n;
+    for (std::size_t k = 0; k < n && ear == n; ++k) {
+      const std::size_t a = remaining[(k + n - 1) % n], b = remaining[k], c = remaining[(k + 1) % n];
+      if (orientation(p[a], p[b], p[c]) != Sign::kPositive) continue;
+      bool empty = true;
+      for (const std::size_t q : remaining) {
+        if (q == a || q == b || q == c || p[q] == p[a] || p[q] == p[b] || p[q] == p[c]) continue;
+        if (orientation(p[a], p[b], p[q]) != Sign::kNegative && orientation(p[b], p[c], p[q]) != Sign::kNegative &&
+            orientation(p[c], p[a], p[q]) != Sign::kNegative) {
+          empty = false;
+          break;
+        }
+      }
+      if (empty) ear = k;
+    }
+    // A simple polygon always has an ear (Meisters' two-ears theorem); only straight runs remain otherwise.
+    const std::size_t k = ear == n ? 0 : ear;
+    triangles.push_back({remaining[(k + n - 1) % n], remaining[k], remaining[(k + 1) % n]});
+    remaining.erase(remaining.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  triangles.push_back({remaining[0], remaining[1], remaining[2]});
+}
+
+double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b) {
+  std::vector<Vec2> current(a.begin(), a.end()), next;
+  for (std::size_t i = 0; i < b.size() && current.size() >= 3; ++i) {
+    const Vec2 p = b[i], q = b[(i + 1) % b.size()];
+    // Inside: on the left of the edge p -> q (or on it).
+    const auto side = [&](const Vec2& v) { return (q.x - p.x) * (v.y - p.y) - (q.y - p.y) * (v.x - p.x); };
+    next.clear();
+    Vec2 prev = current.back();
+    double prev_side = side(prev);
+    for (const Vec2& cur : current) {
+      const double cur_side = side(cur);
+      if (cur_side >= 0.0) {
+        if (prev_side < 0.0) next.push_back(prev + (cur - prev) * (prev_side / (prev_side - cur_side)));
+        next.push_back(cur);
+      } else if (prev_side >= 0.0) {
+        if (prev_side > 0.0) next.push_back(prev + (cur - prev) * (prev_side / (prev_side - cur_side)));
+      }
+      prev = cur;
+      prev_side = cur_side;
+    }
+    current.swap(next);
+  }
+  return current.size() >= 3 ? std::max(0.0, signed_area(current)) : 0.0;
+}
+
 }  // namespace aarad

@@ -3,7 +3,10 @@
 
 #include "core/math.h"
 
+#include <array>
+#include <cstddef>
 #include <span>
+#include <vector>
 
 namespace aarad {
 
@@ -29,6 +32,13 @@ bool is_simple(std::span<const Vec2> polygon);  // no two non-adjacent edges tou
 // Crossing-number test of a point against a simple polygon, in doubles: a point on the boundary may go either
 // way, so callers ask about points that are not on it (a triangle's centroid, a face's area centroid).
 bool contains(std::span<const Vec2> polygon, const Vec2& p);
+
+// Ear clipping of a simple polygon given counter-clockwise in 2D: appends index triples (counter-clockwise) to
+// `triangles`. Vertices where the boundary goes straight on are clipped like any other ear; the resulting
+// zero-area triangles are left for the caller to drop.
+void ear_clip(std::span<const Vec2> polygon, std::vector<std::array<std::size_t, 3>>& triangles);
+// Area of the intersection of two convex polygons, both counter-clockwise (Sutherland-Hodgman, in doubles).
+double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b);
 
 // Projects a planar 3D polygon onto the coordinate plane most orthogonal to `n`, keeping the winding
 // seen from the tip of n counter-clockwise in 2D.

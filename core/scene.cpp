@@ -8,8 +8,11 @@
 #include "core/polygon.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 namespace aarad {
 namespace {
@@ -107,6 +110,116 @@ void Scene::validate() const {
     if (f.material >= materials.size() || f.group >= groups.size() || f.surface >= surfaces.size())
       throw Error(where + ": a face refers to a material, group or surface that does not exist");
   }
+}
+
+namespace {
+
+// A face projected into its surface's plane (counter-clockwise), cut into convex pieces, with their bounds.
+struct FlatFace {
+  std::vector<std::vector<Vec2>> pieces;
+  Vec2 lo, hi;
+  std::uint32_t index = 0;  // the face's index in the scene
+  int line = 0;
+};
+
+std::vector<FlatFace> flatten(const Scene& scene, const Surface& surface, const Vec3& normal) {
+  std::vector<FlatFace> flat;
+  std::vector<Vec2> projected;
+  std::vector<std::array<std::size_t, 3>> triangles;
+  for (const std::uint32_t fi : surface.faces) {
+    const Face& face = scene.faces[fi];
+    projected.resize(face.vertices.size());
+    project_to_2d(face.vertices, normal, projected);
+    FlatFace f;
+    f.index = fi;
+    f.line = face.source_line;
+    f.lo = Vec2(std::numeric_limits<double>::infinity());
+    f.hi = -f.lo;
+    for (const Vec2& p : projected) {
+      f.lo = glm::min(f.lo, p);
+      f.hi = glm::max(f.hi, p);
+    }
+    if (is_convex(projected)) {
+      f.pieces.push_back(projected);
+    } else {
+      triangles.clear();
+      ear_clip(projected, triangles);
+      for (const auto& t : triangles) f.pieces.push_back({projected[t[0]], projected[t[1]], projected[t[2]]});
+    }
+    flat.push_back(std::move(f));
+  }
+  return flat;
+}
+
+// Overlapping area of two faces.
+double overlap(const FlatFace& f, const FlatFace& g) {
+  if (f.hi.x <= g.lo.x || g.hi.x <= f.lo.x || f.hi.y <= g.lo.y || g.hi.y <= f.lo.y) return 0.0;
+  double sum = 0.0;
+  for (const auto& p : f.pieces)
+    for (const auto& q : g.pieces) sum += convex_intersection_area(p, q);
+  return sum;
+}
+
+}  // namespace
+
+std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
+  std::vector<CoplanarOverlap> found;
+  const double tolerance = kPlaneDistance * diagonal();
+  // Coincident planes have nearly equal offsets: sweep the surfaces in order of d. Two unit normals within
+  // kNormalDotTolerance differ by at most sqrt(2 kNormalDotTolerance) in length, which moves d by that times the
+  // distance of a shared point from the origin.
+  double reach = 0.0;
+  for (const Face& f : faces)
+    for (const Vec3& v : f.vertices) reach = std::max(reach, glm::length(v));
+  const double window = 2.0 * tolerance + std::sqrt(2.0 * kNormalDotTolerance) * reach;
+  std::vector<std::uint32_t> order(surfaces.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t x, std::uint32_t y) { return surfaces[x].plane.d < surfaces[y].plane.d; });
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> candidates;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const Surface& s = surfaces[order[i]];
+    candidates.emplace_back(order[i], order[i]);  // faces of one surface may overlap each other too
+    for (std::size_t j = i + 1; j < order.size() && surfaces[order[j]].plane.d - s.plane.d <= window; ++j) {
+      const Surface& t = surfaces[order[j]];
+      if (glm::dot(s.plane.normal, t.plane.normal) < 1.0 - kNormalDotTolerance) continue;
+      const bool in_plane = std::all_of(t.faces.begin(), t.faces.end(), [&](std::uint32_t fi) {
+        return std::all_of(faces[fi].vertices.begin(), faces[fi].vertices.end(),
+                           [&](const Vec3& v) { return std::abs(s.plane.signed_distance(v)) <= tolerance; });
+      });
+      if (in_plane) candidates.emplace_back(std::min(order[i], order[j]), std::max(order[i], order[j]));
+    }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  for (const auto& [a, b] : candidates) {
+    if (a == b && surfaces[a].faces.size() < 2) continue;
+    const Vec3 n = surfaces[a].plane.normal;
+    const std::vector<FlatFace> fa = flatten(*this, surfaces[a], n);
+    std::vector<FlatFace> fb = a == b ? fa : flatten(*this, surfaces[b], n);
+    // Sweep along x: fb sorted by its faces' left ends; a face of fa meets those whose left end lies within its
+    // span, extended to the left by the widest face of fb.
+    std::sort(fb.begin(), fb.end(), [](const FlatFace& x, const FlatFace& y) { return x.lo.x < y.lo.x; });
+    double widest = 0.0;
+    for (const FlatFace& g : fb) widest = std::max(widest, g.hi.x - g.lo.x);
+    CoplanarOverlap o{a, b, 0.0, 0, 0};
+    double largest = 0.0;
+    for (const FlatFace& f : fa) {
+      auto j = std::lower_bound(fb.begin(), fb.end(), f.lo.x - widest,
+                                [](const FlatFace& g, double x) { return g.lo.x < x; });
+      for (; j != fb.end() && j->lo.x < f.hi.x; ++j) {
+        if (a == b && !(f.index < j->index)) continue;  // one surface against itself: each pair of faces once
+        const double shared = overlap(f, *j);
+        o.area += shared;
+        if (shared > largest) {
+          largest = shared;
+          o.line_a = f.line;
+          o.line_b = j->line;
+        }
+      }
+    }
+    if (o.area > 1e-6 * std::min(surfaces[a].area, surfaces[b].area)) found.push_back(o);
+  }
+  return found;
 }
 
 Vec3 Scene::bounds_min() const {

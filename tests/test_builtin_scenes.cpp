@@ -247,6 +247,54 @@ TEST(BuiltinScenes, scene_furnace_is_closed_and_uniform) {
 
 // ---- Office --------------------------------------------------------------------------------------------
 
+// No two faces of a built-in scene lie on one another; a scene that has them is reported with the area.
+TEST(BuiltinScenes, scene_coplanar_overlaps_are_found_and_the_built_ins_have_none) {
+  for (const char* name : {"cornell", "office", "furnace"})
+    EXPECT_TRUE(load_scene(name).coplanar_overlaps().empty()) << name;
+  // The unit cube (floor at y = 0, facing +y) with a rug on its floor, a tile beside the rug (sharing an edge
+  // with it: no overlap), the floor's face copied into a group of its own, and a panel whose two sides lie in
+  // one plane (facing opposite ways: not compared).
+  Scene cube = test::unit_cube();
+  const auto grey = cube.add_material({"rug", Rgb(0.5), Rgb(0.0)});
+  const auto floor = cube.find_group("floor");
+  ASSERT_TRUE(floor.has_value());
+  const std::vector<Vec3> floor_face = cube.faces[cube.groups[*floor].faces.front()].vertices;
+  const Vec3 up(0, 1, 0);
+  test::add_facing(cube, cube.add_group("rug"), grey, {{0.2, 0, 0.2}, {0.5, 0, 0.2}, {0.5, 0, 0.6}, {0.2, 0, 0.6}}, up);
+  test::add_facing(cube, cube.add_group("tile"), grey, {{0.5, 0, 0.2}, {0.7, 0, 0.2}, {0.7, 0, 0.6}, {0.5, 0, 0.6}}, up);
+  cube.add_face(cube.add_group("copy"), grey, floor_face);
+  const std::uint32_t panel = cube.add_group("panel");
+  const std::vector<Vec3> panel_face = {{0.3, 0.3, 0.5}, {0.6, 0.3, 0.5}, {0.6, 0.6, 0.5}, {0.3, 0.6, 0.5}};
+  test::add_facing(cube, panel, grey, panel_face, Vec3(0, 0, 1));
+  test::add_facing(cube, panel, grey, panel_face, Vec3(0, 0, -1));
+  cube.build_surfaces();
+  std::map<std::pair<std::string, std::string>, double> found;
+  for (const Scene::CoplanarOverlap& o : cube.coplanar_overlaps()) {
+    std::string a = cube.groups[cube.surfaces[o.a].group].name, b = cube.groups[cube.surfaces[o.b].group].name;
+    if (b < a) std::swap(a, b);
+    found[{a, b}] = o.area;
+  }
+  const double floor_area = area(floor_face);
+  const std::map<std::pair<std::string, std::string>, double> expected = {
+      {{"floor", "rug"}, 0.12}, {{"floor", "tile"}, 0.08}, {{"copy", "floor"}, floor_area},
+      {{"copy", "rug"}, 0.12},  {{"copy", "tile"}, 0.08}};
+  ASSERT_EQ(found.size(), expected.size());
+  for (const auto& [pair, value] : expected) {
+    ASSERT_TRUE(found.count(pair)) << pair.first << " " << pair.second;
+    EXPECT_NEAR(found[pair], value, 1e-12) << pair.first << " " << pair.second;
+  }
+  // Faces of one surface on one another: one entry with a == b.
+  Scene twice = test::unit_cube();
+  const std::uint32_t g = *twice.find_group("floor");
+  test::add_facing(twice, g, twice.faces[twice.groups[g].faces.front()].material,
+                   {{0.1, 0, 0.1}, {0.4, 0, 0.1}, {0.4, 0, 0.3}, {0.1, 0, 0.3}}, Vec3(0, 1, 0));
+  twice.build_surfaces();
+  const auto self = twice.coplanar_overlaps();
+  ASSERT_EQ(self.size(), 1u);
+  EXPECT_EQ(self[0].a, self[0].b);
+  EXPECT_NEAR(self[0].area, 0.06, 1e-12);
+}
+
 // Surfaces may hide one another unless each lies on or in front of every other's plane (one convex room).
 TEST(BuiltinScenes, scene_occlusion_witness_only_where_surfaces_may_hide_others) {
   EXPECT_FALSE(test::unit_cube().occlusion_witness().has_value());

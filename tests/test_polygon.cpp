@@ -7,6 +7,7 @@
 #include <CGAL/Exact_rational.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -273,6 +274,43 @@ TEST(Predicates, predicate_segments_intersect_touching_and_collinear) {
   EXPECT_TRUE(segments_intersect({-big, -big}, {big, big}, {-big, big}, {big, -big}));
   EXPECT_FALSE(segments_intersect({-big, 0}, {big, 0}, {-big, tiny}, {big, tiny}));  // parallel, one subnormal apart
   EXPECT_TRUE(segments_intersect({-big, 0}, {big, 0}, {-big, tiny}, {big, -tiny}));  // crossing at the origin
+}
+
+TEST(Polygon, polygon_convex_intersection_areas) {
+  const std::vector<Vec2> unit{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  const std::vector<Vec2> shifted{{0.5, 0.5}, {1.5, 0.5}, {1.5, 1.5}, {0.5, 1.5}};
+  const std::vector<Vec2> apart{{2, 0}, {3, 0}, {3, 1}, {2, 1}};
+  const std::vector<Vec2> inside{{0.25, 0.25}, {0.75, 0.25}, {0.5, 0.75}};
+  const std::vector<Vec2> neighbour{{1, 0}, {2, 0}, {2, 1}, {1, 1}};  // shares an edge
+  EXPECT_DOUBLE_EQ(convex_intersection_area(unit, shifted), 0.25);
+  EXPECT_DOUBLE_EQ(convex_intersection_area(shifted, unit), 0.25);
+  EXPECT_EQ(convex_intersection_area(unit, apart), 0.0);
+  EXPECT_DOUBLE_EQ(convex_intersection_area(unit, inside), 0.125);
+  EXPECT_DOUBLE_EQ(convex_intersection_area(inside, unit), 0.125);
+  EXPECT_EQ(convex_intersection_area(unit, neighbour), 0.0);
+  // A square turned by 45 degrees over the unit square, centred on it: an octagon of area 2 (sqrt(2) - 1).
+  const double r = std::sqrt(0.5);
+  const std::vector<Vec2> diamond{{0.5, 0.5 - r}, {0.5 + r, 0.5}, {0.5, 0.5 + r}, {0.5 - r, 0.5}};
+  EXPECT_NEAR(convex_intersection_area(unit, diamond), 2.0 * (std::sqrt(2.0) - 1.0), 1e-15);
+}
+
+TEST(Polygon, polygon_ear_clip_covers_a_concave_polygon) {
+  // An L of area 3 and a comb: the triangles add up to the polygon's area, all counter-clockwise.
+  const std::vector<std::vector<Vec2>> polygons = {
+      {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}},
+      {{0, 0}, {5, 0}, {5, 2}, {4, 2}, {4, 1}, {3, 1}, {3, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 2}, {0, 2}}};
+  for (const auto& p : polygons) {
+    std::vector<std::array<std::size_t, 3>> triangles;
+    ear_clip(p, triangles);
+    EXPECT_EQ(triangles.size(), p.size() - 2);
+    double sum = 0.0;
+    for (const auto& t : triangles) {
+      const std::vector<Vec2> tri{p[t[0]], p[t[1]], p[t[2]]};
+      EXPECT_GE(signed_area(tri), 0.0);
+      sum += signed_area(tri);
+    }
+    EXPECT_DOUBLE_EQ(sum, signed_area(p));
+  }
 }
 
 }  // namespace

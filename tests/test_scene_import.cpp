@@ -325,6 +325,26 @@ TEST_F(SceneImport, import_coplanar_faces_of_a_group_form_one_surface) {
     for (const std::uint32_t f : scene.surfaces[s].faces) EXPECT_EQ(scene.faces[f].surface, s);
 }
 
+TEST_F(SceneImport, import_faces_on_one_another_in_one_plane_warn_with_their_lines) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("rug.obj",
+                                "mtllib s.mtl\n"
+                                "v 0 0 0\nv 4 0 0\nv 4 4 0\nv 0 4 0\n"  // 1-4: the floor
+                                "v 1 1 0\nv 2 1 0\nv 2 2 0\nv 1 2 0\n"  // 5-8: the rug
+                                "v 4 8 0\nv 0 8 0\n"                    // 9-10: a tile beside the floor
+                                "v 1 1 3\nv 2 1 3\nv 2 2 3\n"            // 11-13: the lamp
+                                "g floor\nusemtl grey\nf 1 2 3 4\n"        // line 17
+                                "g tile\nf 4 3 9 10\n"                    // line 19
+                                "g rug\nf 5 6 7 8\n"                      // line 21
+                                "g lamp\nusemtl lamp\nf 13 12 11\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(has_warning(scene, "rug.obj:17: 'floor' (material 'grey') and 'rug' (material 'grey') lie on one "
+                                 "another in one plane over an area of 1 (lines 17 and 21 overlap most)"));
+  int overlaps = 0;
+  for (const std::string& w : scene.warnings) overlaps += w.find("one plane") != std::string::npos;
+  EXPECT_EQ(overlaps, 1);  // the tile only shares an edge with the floor
+}
+
 TEST_F(SceneImport, import_materials_and_emitters) {
   write("s.mtl", kSquareMtl);
   const std::string obj = write("lit.obj",
