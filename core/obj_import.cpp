@@ -378,6 +378,11 @@ Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* ent
                        "material '" + m.name + "': Ke " + rgb_text(m.emission) +
                            " must be finite and >= 0 per channel. Ke is the emitted radiosity; use 0 for a surface "
                            "that does not emit");
+    if (m.emission[c] > kMaxEmission)
+      throw InputError(file, ke_line,
+                       "material '" + m.name + "': Ke " + rgb_text(m.emission) +
+                           " is too large: the solver's sums of flux would overflow. Use at most 1e100 per channel; "
+                           "radiosity is linear in the emission, so scale Ke down and the results back up");
   }
   return m;
 }

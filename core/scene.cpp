@@ -95,8 +95,8 @@ void Scene::validate() const {
       if (!(m.reflectance[c] >= 0.0 && m.reflectance[c] < 1.0))
         throw InputError(where, 0, "material '" + m.name + "': reflectance must lie in [0, 1) per channel, "
                                    "otherwise the solution would not converge");
-      if (!(m.emission[c] >= 0.0) || !std::isfinite(m.emission[c]))
-        throw InputError(where, 0, "material '" + m.name + "': emission must be finite and >= 0 per channel");
+      if (!(m.emission[c] >= 0.0 && m.emission[c] <= kMaxEmission))
+        throw InputError(where, 0, "material '" + m.name + "': emission must be >= 0 and at most 1e100 per channel");
     }
   }
   std::size_t surface_faces = 0;
@@ -109,6 +109,14 @@ void Scene::validate() const {
       if (!finite(v)) throw InputError(where, f.source_line, "a face has a vertex that is not finite");
     if (f.material >= materials.size() || f.group >= groups.size() || f.surface >= surfaces.size())
       throw Error(where + ": a face refers to a material, group or surface that does not exist");
+  }
+  Rgb flux{};
+  for (const Face& f : faces) flux += materials[f.material].emission * area(f.vertices);
+  for (int c = 0; c < 3; ++c) {
+    if (!(flux[c] <= kMaxEmittedFlux))
+      throw InputError(where, 0, "the emitted flux (emission x area, summed over the lights) is too large for the "
+                                 "solver's sums; scale the emission or the geometry down (radiosity is linear in "
+                                 "the emission)");
   }
 }
 

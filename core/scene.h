@@ -13,6 +13,12 @@
 
 namespace aarad {
 
+// The largest emitted radiosity, and the largest emitted flux of a scene, accepted per channel. The solver
+// multiplies fluxes by area ratios and sums them; far below the largest double, these bounds keep every such
+// sum finite. Radiosity is linear in the emission, so a scene can always be scaled into them.
+inline constexpr double kMaxEmission = 1e100;
+inline constexpr double kMaxEmittedFlux = 1e200;
+
 struct Material {
   std::string name;
   Rgb reflectance{0.5};  // rho per channel, each in [0, 1)
@@ -86,8 +92,9 @@ class Scene {
   // size, same material) and fills Surface::area and Group::surfaces. Call after the last add_face.
   void build_surfaces();
 
-  // Checks what every consumer relies on: at least one face, materials with rho in [0, 1) and finite
-  // emission >= 0, finite vertices, every face in a built surface. Throws aarad::InputError naming the
+  // Checks what every consumer relies on: at least one face, materials with rho in [0, 1) and emission in
+  // [0, kMaxEmission], finite vertices, an emitted flux (emission x area) below kMaxEmittedFlux, every face in a
+  // built surface. Throws aarad::InputError naming the
   // scene otherwise. Importers and built-ins call it before handing a scene out.
   void validate() const;
 

@@ -195,6 +195,24 @@ TEST_F(SceneImport, import_negative_ke_is_error_with_mtl_line) {
   EXPECT_NE(e.message().find(">= 0"), std::string::npos);
 }
 
+TEST_F(SceneImport, import_emission_too_large_for_the_solver_is_error) {
+  // Ke 1e308 used to be taken: the first shot's sums overflowed and the solve reported convergence after it.
+  const std::string mtl = write("big.mtl", "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1e308 1e308 1e308\n");
+  const std::string obj = write("big.obj", "mtllib big.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n");
+  const InputError e = import_error(obj);
+  EXPECT_EQ(e.file(), mtl);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.message().find("at most 1e100"), std::string::npos) << e.message();
+  // Within the bound per material, but over a vast area: the scene's emitted flux is refused.
+  write("ok.mtl", "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1e100 1e100 1e100\n");
+  const std::string vast =
+      write("vast.obj", "mtllib ok.mtl\nv 0 0 0\nv 1e60 0 0\nv 1e60 1e60 0\nusemtl lamp\nf 1 2 3\n");
+  EXPECT_NE(import_error(vast).message().find("emitted flux"), std::string::npos);
+  // 1e100 over a unit triangle is fine.
+  write("unit.obj", "mtllib ok.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n");
+  EXPECT_NO_THROW(import_obj((dir_ / "unit.obj").string()));
+}
+
 TEST_F(SceneImport, import_empty_file_is_error) {
   const InputError e = import_error(write("empty.obj", "# nothing\nv 0 0 0\n"));
   EXPECT_NE(e.message().find("no usable faces"), std::string::npos);
