@@ -71,12 +71,11 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     const double reach = std::abs(depth.alpha) + std::abs(depth.beta);
     float spread = static_cast<float>(reach);
     if (spread < reach) spread = std::nextafter(spread, std::numeric_limits<float>::infinity());
-    double seen = 0.0;  // the receiver's factor in this task with nothing in front of it
-    raster->rasterize(std::span<const Vec2>(b.projected.data(), m), [&](int x, int y, double coverage) {
+    // Offers the receiver's entry for pixel (x, y); returns its coverage as the walk will see it.
+    const auto offer = [&](int x, int y, double coverage) {
       // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that
       // the walk's fractions refer to the area receivers can cover there.
       if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
-      seen += coverage * weight[static_cast<std::size_t>(x) * column_height + static_cast<std::size_t>(y)];
       const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
       double inverse_depth = depth.at(px, py);
       if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
@@ -84,7 +83,17 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       // Key -1/depth orders like the depth without a division.
       ++offered;
       arena.insert(x, y, CoverageEntry{-inverse_depth, coverage, receiver, surface, spread});
-    });
+      return coverage;
+    };
+    const std::span<const Vec2> polygon(b.projected.data(), m);
+    double seen = 0.0;  // with keep_unoccluded: the receiver's factor in this task with nothing in front of it
+    if (i < keep_unoccluded_.size() && keep_unoccluded_[i] != 0) {
+      raster->rasterize(polygon, [&](int x, int y, double coverage) {
+        seen += offer(x, y, coverage) * weight[static_cast<std::size_t>(x) * column_height + static_cast<std::size_t>(y)];
+      });
+    } else {
+      raster->rasterize(polygon, offer);
+    }
     if (seen > 0.0) unoccluded.emplace_back(receiver, seen);
   }
   task_entries_[static_cast<std::size_t>(task)] = offered;

@@ -41,6 +41,10 @@ class AaHemicubeBackend final : public FormFactorBackend {
   std::string_view name() const override { return "aa-hemicube"; }
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
+  bool keep_unoccluded(std::span<const std::uint8_t> wanted) override {
+    keep_unoccluded_ = wanted;
+    return true;
+  }
   bool add_unoccluded(std::span<double> out) const override;
 
   // Entries offered to the coverage arena by the last compute(), summed over faces (for benchmarks): every
@@ -65,6 +69,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
   std::array<FaceTask, kTasks> tasks_;
   std::array<std::vector<double>, kTasks> task_sums_;
   std::array<UnoccludedList, kTasks> task_unoccluded_;
+  std::span<const std::uint8_t> keep_unoccluded_;
   std::array<std::size_t, kTasks> task_entries_{};
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;
 };

@@ -44,11 +44,18 @@ class FormFactorBackend {
   // out.size() == receivers.size(); entries outside the subset are left untouched.
   virtual void compute(const Shooter& shooter, const ReceiverView& receivers,
                        std::span<const std::uint32_t> subset, std::span<double> out) = 0;
-  // What the last compute() would have given each receiver it looked at had nothing occluded, on the same
-  // discretisation of the hemisphere (the same pixels and weights): adds it to out[i] (out.size() ==
-  // receivers.size()). The ratio of compute()'s factor to this one is the fraction of the receiver the back end
-  // saw, free of the back end's own discretisation error (refine/near_field.h uses it). Returns false, adding
-  // nothing, when the back end does not keep it.
+  // Asks the following compute() calls to keep, for every receiver i with wanted[i] != 0 (i < wanted.size()),
+  // what it would have got had nothing occluded, on the same discretisation of the hemisphere (the same pixels
+  // and weights), for add_unoccluded. `wanted` must stay valid until the next call; an empty span keeps nothing
+  // (the default, which costs nothing). Returns false when the back end cannot.
+  virtual bool keep_unoccluded(std::span<const std::uint8_t> wanted) {
+    (void)wanted;
+    return false;
+  }
+  // Adds what keep_unoccluded asked the last compute() to keep to out[i] (out.size() == receivers.size()). The
+  // ratio of compute()'s factor to this one is the fraction of the receiver the back end saw, free of the back
+  // end's own discretisation error (refine/near_field.h uses it). Returns false, adding nothing, when the back end
+  // does not keep it.
   virtual bool add_unoccluded(std::span<double> out) const {
     (void)out;
     return false;

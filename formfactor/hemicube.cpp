@@ -43,20 +43,27 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
       continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const auto item = static_cast<std::uint32_t>(i);
-    double seen = 0.0;  // the delta form factors of the receiver's samples, in front of it or not
-    sample_polygon(std::span<const Vec2>(b.projected.data(), m), task.x0, task.x1, height, sample_y, b.crossings,
-                   [&](int x, int y) {
-                     // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
-                     double inverse_depth = depth.at(x + 0.5, sample_y(y));
-                     if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
-                     if (inverse_depth > box.hi) inverse_depth = box.hi;
-                     const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
-                     seen += delta[static_cast<std::size_t>(y) * face_width + x];
-                     if (inverse_depth > b.inverse_depth[p]) {
-                       b.inverse_depth[p] = inverse_depth;
-                       b.item[p] = item;
-                     }
-                   });
+    const auto sample = [&](int x, int y) {
+      // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
+      double inverse_depth = depth.at(x + 0.5, sample_y(y));
+      if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
+      if (inverse_depth > box.hi) inverse_depth = box.hi;
+      const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
+      if (inverse_depth > b.inverse_depth[p]) {
+        b.inverse_depth[p] = inverse_depth;
+        b.item[p] = item;
+      }
+    };
+    const std::span<const Vec2> polygon(b.projected.data(), m);
+    double seen = 0.0;  // with keep_unoccluded: the delta form factors of the receiver's samples, in front or not
+    if (i < keep_unoccluded_.size() && keep_unoccluded_[i] != 0) {
+      sample_polygon(polygon, task.x0, task.x1, height, sample_y, b.crossings, [&](int x, int y) {
+        sample(x, y);
+        seen += delta[static_cast<std::size_t>(y) * face_width + x];
+      });
+    } else {
+      sample_polygon(polygon, task.x0, task.x1, height, sample_y, b.crossings, sample);
+    }
     if (seen > 0.0) unoccluded.emplace_back(item, seen);
   }
   for (int y = 0; y < height; ++y) {

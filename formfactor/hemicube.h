@@ -84,6 +84,10 @@ class HemicubeBackend final : public FormFactorBackend {
   std::string_view name() const override { return "hemicube"; }
   void compute(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                std::span<double> out) override;
+  bool keep_unoccluded(std::span<const std::uint8_t> wanted) override {
+    keep_unoccluded_ = wanted;
+    return true;
+  }
   bool add_unoccluded(std::span<double> out) const override;
 
  private:
@@ -101,6 +105,7 @@ class HemicubeBackend final : public FormFactorBackend {
   PreparedReceivers prepared_;
   std::array<std::vector<double>, kFaceTasks> task_sums_;
   std::array<UnoccludedList, kFaceTasks> task_unoccluded_;
+  std::span<const std::uint8_t> keep_unoccluded_;
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;
 };
 

@@ -44,6 +44,34 @@ void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span
   near_patch_.assign(patch_centroid_.size(), 0);
 }
 
+double NearFieldCorrection::mark_near_patches(const NearFieldShooter& shooter) {
+  double radius = 0.0;
+  for (const Vec3& corner : shooter.polygon) radius = std::max(radius, glm::length(corner - shooter.centroid));
+  // Every point of a patch lies within its radius of its centroid.
+  const double near_distance = reach_ * radius;
+  for (std::uint32_t p : near_patches_) near_patch_[p] = 0;
+  near_patches_.clear();
+  for (std::uint32_t p = 0; p < patch_centroid_.size(); ++p) {
+    if (patch_radius_[p] < 0.0) continue;  // no patch has this id
+    const double within = near_distance + patch_radius_[p];
+    const Vec3 d = patch_centroid_[p] - shooter.centroid;
+    if (glm::dot(d, d) <= within * within) {
+      near_patch_[p] = 1;
+      near_patches_.push_back(p);
+    }
+  }
+  return radius;
+}
+
+std::span<const std::uint8_t> NearFieldCorrection::candidates(const NearFieldShooter& shooter,
+                                                              const formfactor::ReceiverView& receivers) {
+  candidate_.assign(receivers.size(), 0);
+  if (!(reach_ > 0.0)) return candidate_;
+  mark_near_patches(shooter);
+  for (std::size_t i = 0; i < receivers.size(); ++i) candidate_[i] = near_patch(receivers.patch(i)) ? 1 : 0;
+  return candidate_;
+}
+
 void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<double> ff) {
   near_.clear();
@@ -54,32 +82,16 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
     far_scale_ = 1.0;
   }
   if (!(reach_ > 0.0) || !(shooter.area > 0.0)) return;
-  double radius = 0.0;
-  for (const Vec3& corner : shooter.polygon) radius = std::max(radius, glm::length(corner - shooter.centroid));
+  const double radius = mark_near_patches(shooter);
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
-
-  // The patches that may hold a receiver whose centroid is near: every point of a patch lies within its radius
-  // of its centroid.
-  const bool by_patch = !patch_centroid_.empty();
-  for (std::uint32_t p : near_patches_) near_patch_[p] = 0;
-  near_patches_.clear();
-  for (std::uint32_t p = 0; by_patch && p < patch_centroid_.size(); ++p) {
-    if (patch_radius_[p] < 0.0) continue;  // no patch has this id
-    const double within = near_distance + patch_radius_[p];
-    const Vec3 d = patch_centroid_[p] - shooter.centroid;
-    if (glm::dot(d, d) <= within * within) {
-      near_patch_[p] = 1;
-      near_patches_.push_back(p);
-    }
-  }
 
   const std::size_t count = whole_shot ? receivers.size() : subset.size();
   double back_end_total = 0.0, shaped_total = 0.0;
   for (std::size_t k = 0; k < count; ++k) {
     const std::uint32_t i = whole_shot ? static_cast<std::uint32_t>(k) : subset[k];
     if (!(ff[i] > 0.0)) continue;  // hidden, culled or behind: nothing to shape
-    if (by_patch && (receivers.patch(i) >= near_patch_.size() || near_patch_[receivers.patch(i)] == 0)) continue;
+    if (!near_patch(receivers.patch(i))) continue;
     const std::span<const Vec3> polygon = receivers.polygon(i);
     const double area = aarad::area(polygon);
     const Vec3 centroid = aarad::centroid(polygon);

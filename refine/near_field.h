@@ -71,6 +71,11 @@ class NearFieldCorrection {
   // (empty spans), at every receiver.
   void set_patches(std::span<const Vec3> centroids, std::span<const double> radii);
 
+  // The receivers a shot from `shooter` may correct (its polygon and centroid are read): a flag per receiver,
+  // for FormFactorBackend::keep_unoccluded, so that the back end keeps their unoccluded factors and no others.
+  // Valid until the next call.
+  std::span<const std::uint8_t> candidates(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers);
+
   // Rewrites ff[i] for the near receivers among `subset` (all receivers when it is empty: a whole shot, which
   // sets the scale that later subsets of the same shot use). ff holds the back end's factors from the shooter.
   void apply(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
@@ -89,7 +94,15 @@ class NearFieldCorrection {
   double far_scale_ = 1.0;
   std::vector<Vec3> patch_centroid_;
   std::vector<double> patch_radius_;
+  // Flags the patches that may hold a near receiver of a shot from `shooter` (all, without a table of patches);
+  // returns the shooter's radius.
+  double mark_near_patches(const NearFieldShooter& shooter);
+  bool near_patch(std::uint32_t patch) const {
+    return patch_centroid_.empty() || (patch < near_patch_.size() && near_patch_[patch] != 0);
+  }
+
   std::vector<std::uint8_t> near_patch_;  // per patch id: 1 when it may hold near receivers (this shot)
+  std::vector<std::uint8_t> candidate_;   // per receiver: candidates()
   std::vector<std::uint32_t> near_patches_;
   std::vector<std::uint32_t> near_;
   std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)

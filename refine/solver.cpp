@@ -209,10 +209,14 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   // behind it, so the polygon containing the point never projects over the whole hemicube.
   const Vec3 lift = normal * (1e-9 * scene_diagonal_);
   const Vec3 centroid = hierarchy_.centroid(shooter);
+  const std::vector<Vec3> corners = hierarchy_.corners(shooter);
   std::vector<Vec3> points;
   std::vector<double> weights;
+  NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), {}, {}, {}};
   const bool near_field = near_field_.reach() > 0.0;
-  // With the near-field correction, the back end's factors with nothing occluding too (empty when it has none).
+  // With the near-field correction, the back end keeps the unoccluded factors of the receivers it may correct
+  // (taken into `into`, which is left empty when the back end has none).
+  bool kept = near_field && backend_->keep_unoccluded(near_field_.candidates(near, cache_.view()));
   const auto take_unoccluded = [&](std::vector<double>& into) {
     into.assign(ff_.size(), 0.0);
     if (!backend_->add_unoccluded(into)) into.clear();
@@ -221,9 +225,9 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     points.push_back(centroid + lift);
     weights.push_back(1.0);
     backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), subset, ff_);
-    if (near_field) take_unoccluded(unoccluded_);
+    if (kept) take_unoccluded(unoccluded_);
   } else {
-    const auto samples = patch_samples(hierarchy_.corners(shooter), options_.shooter_samples);
+    const auto samples = patch_samples(corners, options_.shooter_samples);
     ff_sample_.assign(ff_.size(), 0.0);
     const auto for_each_receiver = [&](auto&& body) {
       if (subset.empty()) {
@@ -233,26 +237,25 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
       }
     };
     for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
-    if (near_field) unoccluded_.assign(ff_.size(), 0.0);
+    if (kept) unoccluded_.assign(ff_.size(), 0.0);
     for (const SamplePoint& sample : samples) {
       points.push_back(sample.position + lift);
       weights.push_back(sample.weight);
       backend_->compute(formfactor::Shooter::from_normal(points.back(), normal), cache_.view(), subset, ff_sample_);
       for_each_receiver([&](std::uint32_t i) { ff_[i] += sample.weight * ff_sample_[i]; });
-      if (near_field && !unoccluded_.empty()) {
+      if (kept) {
         take_unoccluded(unoccluded_sample_);
-        if (unoccluded_sample_.empty()) {
-          unoccluded_.clear();
-        } else {
-          for (std::size_t i = 0; i < unoccluded_.size(); ++i) unoccluded_[i] += sample.weight * unoccluded_sample_[i];
-        }
+        kept = !unoccluded_sample_.empty();
+        for (std::size_t i = 0; kept && i < unoccluded_.size(); ++i) unoccluded_[i] += sample.weight * unoccluded_sample_[i];
       }
     }
   }
+  if (!kept) unoccluded_.clear();
   if (near_field) {
-    const std::vector<Vec3> corners = hierarchy_.corners(shooter);
-    near_field_.apply({corners, centroid, normal, hierarchy_.area(shooter), points, weights, unoccluded_},
-                      cache_.view(), subset, ff_);
+    near.points = points;
+    near.weights = weights;
+    near.unoccluded = unoccluded_;
+    near_field_.apply(near, cache_.view(), subset, ff_);
   }
   times_.form_factors += seconds_since(start);
 }

@@ -206,10 +206,18 @@ TEST(NearField, AaHemicubeSeesAJunctionWhole) {
   Junction scene;
   auto aa = formfactor::make_backend("aa-hemicube", {100});
   formfactor::AnalyticBackend exact_backend;
+  // The back end keeps the unoccluded factors of the wall only (the ceiling is not asked for).
+  std::vector<std::uint8_t> wanted(scene.view.size(), 0);
+  for (std::uint32_t r : scene.wall) wanted[r] = 1;
+  ASSERT_TRUE(aa->keep_unoccluded(wanted));
   std::vector<double> aa_ff = scene.shoot(*aa), exact_ff = scene.shoot(exact_backend);
   std::vector<double> unoccluded(scene.view.size(), 0.0);
   ASSERT_TRUE(aa->add_unoccluded(unoccluded));
   for (std::uint32_t r : scene.wall) EXPECT_NEAR(unoccluded[r], aa_ff[r], 1e-12 * aa_ff[r]) << r;  // nothing in front
+  for (std::uint32_t r : scene.ceiling) {
+    EXPECT_GT(aa_ff[r], 0.0);
+    EXPECT_EQ(unoccluded[r], 0.0);
+  }
   const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
   const std::vector<double> weights = {1.0};
   NearFieldShooter shooter = scene.shooter(points, weights);
@@ -222,27 +230,36 @@ TEST(NearField, AaHemicubeSeesAJunctionWhole) {
 
 TEST(NearField, HiddenPartsStayHidden) {
   // A screen between the floor's centroid and the lower half of the wall: those elements get nothing from the
-  // AA hemicube, and the correction gives them nothing either; the upper half is reshaped as before.
-  Junction scene;
-  add_surface(scene.view, {rectangle(Vec3(0.9, -1, 0), Vec3(0, 0, 0.45), Vec3(0, 3, 0))}, 4, 400);  // facing -x
-  auto aa = formfactor::make_backend("aa-hemicube", {100});
-  std::vector<double> ff = scene.shoot(*aa);
-  std::vector<double> unoccluded(scene.view.size(), 0.0);
-  ASSERT_TRUE(aa->add_unoccluded(unoccluded));
-  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
+  // AA hemicube, and the correction gives them nothing either; the row the screen's edge crosses keeps the part
+  // the back end saw; the upper rows are reshaped as without the screen.
+  Junction open, screened;
+  add_surface(screened.view, {rectangle(Vec3(0.9, -1, 0), Vec3(0, 0, 0.45), Vec3(0, 3, 0))}, 4, 400);  // facing -x
+  const std::vector<Vec3> points = {open.centroid + Vec3(0, 0, 1e-9)};
   const std::vector<double> weights = {1.0};
-  NearFieldShooter shooter = scene.shooter(points, weights);
-  shooter.unoccluded = unoccluded;
-  NearFieldCorrection correction(4.0);
-  correction.apply(shooter, scene.view, {}, ff);
-  for (int i = 0; i < scene.n; ++i) {
-    for (int j = 0; j < scene.n; ++j) {
-      const std::uint32_t r = scene.wall[static_cast<std::size_t>(j * scene.n + i)];  // grid(): along z first
+  const auto corrected = [&](const Junction& scene) {
+    auto aa = formfactor::make_backend("aa-hemicube", {100});
+    NearFieldCorrection correction(4.0);
+    NearFieldShooter shooter = scene.shooter(points, weights);
+    EXPECT_TRUE(aa->keep_unoccluded(correction.candidates(shooter, scene.view)));
+    std::vector<double> ff = scene.shoot(*aa);
+    std::vector<double> unoccluded(scene.view.size(), 0.0);
+    EXPECT_TRUE(aa->add_unoccluded(unoccluded));
+    shooter.unoccluded = unoccluded;
+    correction.apply(shooter, scene.view, {}, ff);
+    return ff;
+  };
+  const std::vector<double> lit = corrected(open), shaded = corrected(screened);
+  for (int i = 0; i < open.n; ++i) {
+    for (int j = 0; j < open.n; ++j) {
+      const std::uint32_t r = open.wall[static_cast<std::size_t>(j * open.n + i)];  // grid(): along z first
       // The screen's top edge, seen from (0.5, 0.5, 0), hides the wall below z = 0.45 x 0.5 / 0.4 = 0.5625.
       if ((i + 1) / 8.0 <= 0.5) {
-        EXPECT_NEAR(ff[r], 0.0, 1e-15) << i << " " << j;
-      } else if (i / 8.0 >= 0.6) {
-        EXPECT_GT(ff[r], 0.0) << i << " " << j;
+        EXPECT_NEAR(shaded[r], 0.0, 1e-15) << i << " " << j;
+      } else if (i / 8.0 < 0.5625) {  // row 4, z in [0.5, 0.625]: about half of it seen
+        EXPECT_GT(shaded[r], 0.3 * lit[r]) << i << " " << j;
+        EXPECT_LT(shaded[r], 0.7 * lit[r]) << i << " " << j;
+      } else {
+        EXPECT_NEAR(shaded[r] / lit[r], shaded[open.wall.back()] / lit[open.wall.back()], 1e-9) << i << " " << j;
       }
     }
   }
