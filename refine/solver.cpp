@@ -16,6 +16,7 @@
 #include "refine/solver.h"
 
 #include "core/error.h"
+#include "core/quadrature.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -33,30 +34,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// Gauss-Legendre nodes and weights on [0, 1] (Newton iteration on P_n; Numerical Recipes, section 4.6).
-void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
-  nodes.assign(static_cast<std::size_t>(n), 0.0);
-  weights.assign(static_cast<std::size_t>(n), 0.0);
-  for (int i = 0; i < n; ++i) {
-    double x = std::cos(kPi * (i + 0.75) / (n + 0.5));
-    double derivative = 1.0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      double p0 = 1.0, p1 = 0.0;
-      for (int k = 1; k <= n; ++k) {
-        const double p2 = p1;
-        p1 = p0;
-        p0 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p2) / k;
-      }
-      derivative = n * (x * p0 - p1) / (x * x - 1.0);
-      const double step = p0 / derivative;
-      x -= step;
-      if (std::abs(step) < 1e-15) break;
-    }
-    nodes[static_cast<std::size_t>(i)] = 0.5 * (1.0 - x);
-    weights[static_cast<std::size_t>(i)] = 1.0 / ((1.0 - x * x) * derivative * derivative);  // = w / 2
-  }
 }
 
 struct SamplePoint {

@@ -1,6 +1,7 @@
 // The near-field correction (refine/near_field.h): a unit floor patch shooting into the wall it meets, cut into
 // small elements, against the patch-to-element factors F(A_s -> e) integrated from the elements' side; the shot's
 // total kept; receivers far away or as large as the patch only scaled; occlusion kept.
+#include "core/quadrature.h"
 #include "formfactor/analytic.h"
 #include "formfactor/backend.h"
 #include "refine/near_field.h"
@@ -20,29 +21,6 @@ using formfactor::testing::Polygon;
 using formfactor::testing::add_surface;
 using formfactor::testing::grid;
 using formfactor::testing::rectangle;
-
-// Gauss-Legendre nodes and weights on [0, 1] (Newton on P_n).
-void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
-  nodes.assign(static_cast<std::size_t>(n), 0.0);
-  weights.assign(static_cast<std::size_t>(n), 0.0);
-  for (int i = 0; i < n; ++i) {
-    double x = std::cos(kPi * (i + 0.75) / (n + 0.5)), derivative = 1.0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      double p0 = 1.0, p1 = 0.0;
-      for (int k = 1; k <= n; ++k) {
-        const double p2 = p1;
-        p1 = p0;
-        p0 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p2) / k;
-      }
-      derivative = n * (x * p0 - p1) / (x * x - 1.0);
-      const double step = p0 / derivative;
-      x -= step;
-      if (std::abs(step) < 1e-15) break;
-    }
-    nodes[static_cast<std::size_t>(i)] = 0.5 * (1.0 - x);
-    weights[static_cast<std::size_t>(i)] = 1.0 / ((1.0 - x * x) * derivative * derivative);
-  }
-}
 
 // F(A_s -> e) for the rectangle e = origin + [0, 1] e1 + [0, 1] e2 with unit normal `normal`, by reciprocity
 // from e's side: (1 / A_s) integral over e of the exact point-to-polygon factor to the patch (Baum et al. eq. 9),
@@ -79,8 +57,14 @@ struct Junction {
     backend.compute(formfactor::Shooter::from_normal(centroid + Vec3(0, 0, 1e-9), normal), view, {}, ff);
     return ff;
   }
-  NearFieldShooter shooter(std::span<const Vec3> points, std::span<const double> weights) const {
-    return {floor, centroid, normal, 1.0, points, weights, {}};
+  // The shooting point the back ends use, and the patch as the correction sees it.
+  std::vector<Vec3> points{centroid + Vec3(0, 0, 1e-9)};
+  std::vector<double> weights{1.0};
+  NearFieldShooter shooter() const { return {floor, centroid, normal, 1.0, points, weights, {}}; }
+  // `ff` corrected by `correction` (reach 4) as a whole shot.
+  std::vector<double> corrected(std::vector<double> ff, NearFieldCorrection& correction) const {
+    correction.apply(shooter(), view, {}, ff);
+    return ff;
   }
   // F(A_s -> e) for the wall element in row i (along z) and column j (along y).
   double exact(int i, int j) const {
@@ -93,11 +77,8 @@ TEST(NearField, JunctionElementsGetThePatchFactorNotTheCentroids) {
   Junction scene;
   formfactor::AnalyticBackend backend;
   const std::vector<double> before = scene.shoot(backend);
-  std::vector<double> after = before;
-  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
-  const std::vector<double> weights = {1.0};
   NearFieldCorrection correction(4.0);
-  correction.apply(scene.shooter(points, weights), scene.view, {}, after);
+  const std::vector<double> after = scene.corrected(before, correction);
   EXPECT_EQ(correction.last_corrected().size(), scene.wall.size());
 
   // Row i = 0 touches the floor: seen edge on from the centroid, it gets far too little; rows above get too much.
@@ -142,11 +123,8 @@ TEST(NearField, KeepsTheShotsTotalAndScalesFarOrLargeReceiversAlike) {
                                           3, 300).front();  // the wall y = 0, facing +y
   formfactor::AnalyticBackend backend;
   const std::vector<double> before = scene.shoot(backend);
-  std::vector<double> after = before;
-  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
-  const std::vector<double> weights = {1.0};
   NearFieldCorrection correction(4.0);
-  correction.apply(scene.shooter(points, weights), scene.view, {}, after);
+  const std::vector<double> after = scene.corrected(before, correction);
   EXPECT_EQ(correction.last_corrected().size(), scene.wall.size());
   double total_before = 0.0, total_after = 0.0, near_before = 0.0, near_after = 0.0;
   for (std::size_t r = 0; r < before.size(); ++r) {
@@ -170,9 +148,8 @@ TEST(NearField, KeepsTheShotsTotalAndScalesFarOrLargeReceiversAlike) {
   EXPECT_GT(before[large], 0.0);
   EXPECT_DOUBLE_EQ(after[large], before[large] * far_scale);
   // Off, nothing changes.
-  std::vector<double> off = before;
-  NearFieldCorrection(0.0).apply(scene.shooter(points, weights), scene.view, {}, off);
-  EXPECT_EQ(off, before);
+  NearFieldCorrection off(0.0);
+  EXPECT_EQ(scene.corrected(before, off), before);
 }
 
 TEST(NearField, WithoutAFarFieldTheNearFieldKeepsItsTotal) {
@@ -183,11 +160,8 @@ TEST(NearField, WithoutAFarFieldTheNearFieldKeepsItsTotal) {
   scene.view = wall_only;
   formfactor::AnalyticBackend backend;
   const std::vector<double> before = scene.shoot(backend);
-  std::vector<double> after = before;
-  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
-  const std::vector<double> weights = {1.0};
   NearFieldCorrection correction(4.0);
-  correction.apply(scene.shooter(points, weights), scene.view, {}, after);
+  const std::vector<double> after = scene.corrected(before, correction);
   double sum_before = 0.0, sum_after = 0.0;
   for (std::size_t r = 0; r < before.size(); ++r) {
     sum_before += before[r];
@@ -218,9 +192,7 @@ TEST(NearField, AaHemicubeSeesAJunctionWhole) {
     EXPECT_GT(aa_ff[r], 0.0);
     EXPECT_EQ(unoccluded[r], 0.0);
   }
-  const std::vector<Vec3> points = {scene.centroid + Vec3(0, 0, 1e-9)};
-  const std::vector<double> weights = {1.0};
-  NearFieldShooter shooter = scene.shooter(points, weights);
+  NearFieldShooter shooter = scene.shooter();
   NearFieldCorrection correction(4.0);
   correction.apply(shooter, scene.view, {}, exact_ff);
   shooter.unoccluded = unoccluded;
@@ -234,12 +206,10 @@ TEST(NearField, HiddenPartsStayHidden) {
   // the back end saw; the upper rows are reshaped as without the screen.
   Junction open, screened;
   add_surface(screened.view, {rectangle(Vec3(0.9, -1, 0), Vec3(0, 0, 0.45), Vec3(0, 3, 0))}, 4, 400);  // facing -x
-  const std::vector<Vec3> points = {open.centroid + Vec3(0, 0, 1e-9)};
-  const std::vector<double> weights = {1.0};
   const auto corrected = [&](const Junction& scene) {
     auto aa = formfactor::make_backend("aa-hemicube", {100});
     NearFieldCorrection correction(4.0);
-    NearFieldShooter shooter = scene.shooter(points, weights);
+    NearFieldShooter shooter = scene.shooter();
     EXPECT_TRUE(aa->keep_unoccluded(correction.candidates(shooter, scene.view)));
     std::vector<double> ff = scene.shoot(*aa);
     std::vector<double> unoccluded(scene.view.size(), 0.0);
