@@ -87,12 +87,15 @@ void StagedCoverageArena::reset(int width, int height) {
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   if (!clean_) {
     std::fill(depth_.begin(), depth_.end(), kFar);
+    std::fill(surface_.begin(), surface_.end(), kNoPartial);
+    std::fill(covered_.begin(), covered_.end(), 0.0);
     for (std::vector<Staged>& stage : stage_) stage.clear();
   }
   // Two columns more than the face: insert() prefetches two columns ahead.
   if (depth_.size() < pixels + 2 * height) {
     depth_.resize(pixels + 2 * height, kFar);
     receiver_.resize(pixels + 2 * height, 0);
+    surface_.resize(pixels + 2 * height, kNoPartial);
   }
   // Blocks of 2^k whole columns, as many as fit in kBlockPixels (at least one column).
   block_shift_ = 0;
@@ -101,6 +104,8 @@ void StagedCoverageArena::reset(int width, int height) {
   height_ = static_cast<std::size_t>(height);
   block_pixels_ = height_ << block_shift_;
   blocks_ = (static_cast<std::size_t>(width) + (std::size_t{1} << block_shift_) - 1) >> block_shift_;
+  one_surface_pixels_ = blocks_ == 1;
+  if (one_surface_pixels_ && covered_.size() < block_pixels_) covered_.resize(block_pixels_, 0.0);
   if (stage_.size() < blocks_) stage_.resize(blocks_);
   pixels_ = pixels;
   clean_ = false;

@@ -316,6 +316,17 @@ class CoverageArena {
 // that block's pixels. Each pixel's list receives the same entries in the same order as with CoverageArena (a
 // full entry never depends on the lists, and a partial entry is tested against the inline entry at its arrival),
 // so the lists, the walk and the emitted values are identical; only the time of the insertion sort moves.
+//
+// Pixels of one surface. Most partial entries (78 % of them in an office shot at N = 100) fall in pixels where
+// every partial entry belongs to one physical surface and no full entry lies: the inside of a tiled floor or
+// wall. Such a list is one group, in arrival order, and its walk gives every entry E = A, capped so that f never
+// exceeds 1 (open = 1 - 0 for the group's one layer, whichever branch the walk takes). insert() notes per pixel
+// whether its partial entries so far share one surface; the replay gives those pixels' entries their E directly,
+// in arrival order with a running f per pixel, without building the list. The values are the walk's, bit for
+// bit; they are emitted during the replay of their block, before the block's other pixels. Only when the face is
+// one block (N up to about 180): there its per-pixel arrays stay in cache and an office shot at N = 100 is about
+// 10 % faster; on faces of several blocks (N = 300: no gain; N = 1000: 15-25 % slower, measured) the bookkeeping
+// at insertion and the replay's reads in arrival order cost more than the lists they save.
 class StagedCoverageArena {
  public:
   static constexpr std::size_t kBlockPixels = 16384;
@@ -336,18 +347,44 @@ class StagedCoverageArena {
       receiver_[pixel] = entry.receiver;
       return;
     }
+    if (one_surface_pixels_) {
+      // The pixel's one surface so far, or kMixed (ids from kMixed up count as mixed: they are the markers).
+      std::uint32_t& only = surface_[pixel];
+      const std::uint32_t surface = entry.surface < kMixed ? entry.surface : kMixed;
+      if (only != surface) only = only == kNoPartial ? surface : kMixed;
+    }
     const auto block = static_cast<std::size_t>(x) >> block_shift_;
     stage_[block].push_back(Staged{entry, static_cast<std::uint32_t>(pixel - block * block_pixels_)});
   }
 
-  // Walks every pixel front to back in pixel order, calling emit(pixel, receiver, E), and empties the arena.
+  // Walks every pixel front to back, calling emit(pixel, receiver, E), and empties the arena. Block by block;
+  // within a block, first the pixels of one surface (entries in arrival order), then the others in pixel order.
+  // Each pixel's entries come front to back, as CoverageArena::take_all gives them.
   template <class Emit>
   void take_all(Emit&& emit) {
     for (std::size_t block = 0; block < blocks_; ++block) {
       const std::size_t begin = block * block_pixels_;
       const std::size_t end = std::min(begin + block_pixels_, pixels_);
       lists_.reset(end - begin);
-      for (const Staged& s : stage_[block]) lists_.insert(s.pixel, s.entry);
+      for (const Staged& s : stage_[block]) {
+        const std::size_t p = begin + s.pixel;
+        if (one_surface_pixels_ && surface_[p] != kMixed && depth_[p] == kFar) {
+          // One group, one layer, open = 1: the walk's take(A), with this pixel's f.
+          double& covered = covered_[s.pixel];
+          double e = std::min(s.entry.coverage, 1.0 - covered);
+          if (e < 0.0) e = 0.0;
+          covered += e;
+          emit(p, s.entry.receiver, e);
+        } else {
+          lists_.insert(s.pixel, s.entry);
+        }
+      }
+      if (one_surface_pixels_) {
+        for (const Staged& s : stage_[block]) {  // only staged pixels have a surface or an f to clear
+          surface_[begin + s.pixel] = kNoPartial;
+          covered_[s.pixel] = 0.0;
+        }
+      }
       stage_[block].clear();
       for (std::size_t p = begin; p < end; ++p) {
         CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit);
@@ -366,8 +403,13 @@ class StagedCoverageArena {
     std::uint32_t pixel;  // within the block
   };
 
+  static constexpr std::uint32_t kNoPartial = 0xFFFFFFFFu, kMixed = 0xFFFFFFFEu;
+
   std::vector<double> depth_;            // per pixel: depth of the nearest full entry, kFar when none
   std::vector<std::uint32_t> receiver_;  // per pixel: the nearest full entry
+  std::vector<std::uint32_t> surface_;   // per pixel: the surface of all its staged entries, kNoPartial or kMixed
+  std::vector<double> covered_;          // per pixel of a block: f of a pixel of one surface during the replay
+  bool one_surface_pixels_ = false;      // whether this face takes the shortcut (one block)
   std::vector<std::vector<Staged>> stage_;  // per block: partial entries in arrival order
   PartialLists lists_;                      // the lists of one block
   std::size_t pixels_ = 0, height_ = 1, block_pixels_ = 1, blocks_ = 0;

@@ -1,11 +1,14 @@
 // The staged coverage arena of the AA hemicube (formfactor/coverage_list.h) builds, block by block, the same
 // per-pixel lists as the immediate CoverageArena (Chandran, Kiran, Phani and Rai, section 3.2.1: lists sorted on
 // insertion, same-surface groups, layers of overlapping depth ranges, full pixels): the same entries in the same
-// order give the same walk, value for value, whatever the number of column blocks.
+// order give the same walk, value for value, whatever the number of column blocks. The staged arena emits the
+// pixels whose entries all belong to one surface before the others of their block, so its output is compared
+// after a stable sort by pixel: each pixel's entries in the same order with the same values.
 #include "formfactor/coverage_list.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <tuple>
@@ -41,6 +44,7 @@ TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
       immediate.take_all([&](std::size_t p, std::uint32_t r, double e) { a.emplace_back(p, r, e); });
       staged.take_all([&](std::size_t p, std::uint32_t r, double e) { b.emplace_back(p, r, e); });
       EXPECT_GT(a.size(), static_cast<std::size_t>(width) * height / 4);  // most pixels emit something
+      std::stable_sort(b.begin(), b.end(), [](const auto& l, const auto& r) { return std::get<0>(l) < std::get<0>(r); });
       EXPECT_EQ(a, b) << width << " x " << height;
     }
   }
