@@ -22,8 +22,14 @@ using Emitted = std::vector<std::tuple<std::size_t, std::uint32_t, double>>;
 TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  // 300 x 200 pixels: blocks of 64 columns (12 800 pixels), five blocks; 40 x 30: one block.
-  for (const auto& [width, height] : {std::pair{300, 200}, std::pair{40, 30}}) {
+  // 300 x 200 pixels: blocks of 64 columns (12 800 pixels), five blocks; 100 x 100 and 40 x 30: one block, where
+  // pixels of one surface skip their lists. Most pixels of 100 x 100 get one or two entries, so many are of one
+  // surface; a pixel of 40 x 30 gets about 17 entries of six surfaces, so hardly any.
+  struct Case {
+    int width, height;
+    bool one_surface_pixels;
+  };
+  for (const auto& [width, height, one_surface_pixels] : {Case{300, 200, false}, Case{100, 100, true}, Case{40, 30, false}}) {
     CoverageArena immediate;
     StagedCoverageArena staged;
     for (int round = 0; round < 2; ++round) {  // twice: the arenas must come back empty after take_all
@@ -44,6 +50,10 @@ TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
       immediate.take_all([&](std::size_t p, std::uint32_t r, double e) { a.emplace_back(p, r, e); });
       staged.take_all([&](std::size_t p, std::uint32_t r, double e) { b.emplace_back(p, r, e); });
       EXPECT_GT(a.size(), static_cast<std::size_t>(width) * height / 4);  // most pixels emit something
+      // The pixels of one surface come first: the order differs, so that path ran.
+      if (one_surface_pixels) {
+        EXPECT_NE(a, b) << width << " x " << height;
+      }
       std::stable_sort(b.begin(), b.end(), [](const auto& l, const auto& r) { return std::get<0>(l) < std::get<0>(r); });
       EXPECT_EQ(a, b) << width << " x " << height;
     }
