@@ -61,6 +61,15 @@ struct CoverageEntry {
   float spread = 0.0f;        // the key ranges over [depth - spread, depth + spread] in the pixel (rounded up)
 };
 
+// Adds `share` to a pixel's f (`covered`), capped so that f never exceeds 1 (overlapping pieces of one surface,
+// rounding); returns what was added, E.
+inline double take_share(double share, double& covered) {
+  double e = std::min(share, 1.0 - covered);
+  if (e < 0.0) e = 0.0;
+  covered += e;
+  return e;
+}
+
 // The front-to-back walk of section 3.2.1 with layers (see the top of this file). Walks one sorted list, then
 // optionally one more entry behind it.
 class CoverageWalk {
@@ -107,13 +116,7 @@ class CoverageWalk {
   double covered() const { return covered_; }
 
  private:
-  // Adds a share to f, capped so that f never exceeds 1 (overlapping pieces of one surface, rounding).
-  double take(double share) {
-    double e = std::min(share, 1.0 - covered_);
-    if (e < 0.0) e = 0.0;
-    covered_ += e;
-    return e;
-  }
+  double take(double share) { return take_share(share, covered_); }
   double covered_ = 0.0;
 };
 
@@ -324,9 +327,10 @@ class CoverageArena {
 // whether its partial entries so far share one surface; the replay gives those pixels' entries their E directly,
 // in arrival order with a running f per pixel, without building the list. The values are the walk's, bit for
 // bit; they are emitted during the replay of their block, before the block's other pixels. Only when the face is
-// one block (N up to about 180): there its per-pixel arrays stay in cache and an office shot at N = 100 is about
-// 10 % faster; on faces of several blocks (N = 300: no gain; N = 1000: 15-25 % slower, measured) the bookkeeping
-// at insertion and the replay's reads in arrival order cost more than the lists they save.
+// one block (every face up to N = 128): there its per-pixel arrays stay in cache, and a shot at N = 100 is 8 %
+// (Cornell box) to 17 % (office) faster; tried on faces of several blocks, it gained nothing at N = 300 and cost
+// 15-25 % at N = 1000 (docs/benchmarks.md), where the bookkeeping at insertion and the replay's reads in arrival
+// order cost more than the lists they save.
 class StagedCoverageArena {
  public:
   static constexpr std::size_t kBlockPixels = 16384;
@@ -370,11 +374,7 @@ class StagedCoverageArena {
         const std::size_t p = begin + s.pixel;
         if (one_surface_pixels_ && surface_[p] != kMixed && depth_[p] == kFar) {
           // One group, one layer, open = 1: the walk's take(A), with this pixel's f.
-          double& covered = covered_[s.pixel];
-          double e = std::min(s.entry.coverage, 1.0 - covered);
-          if (e < 0.0) e = 0.0;
-          covered += e;
-          emit(p, s.entry.receiver, e);
+          emit(p, s.entry.receiver, take_share(s.entry.coverage, covered_[s.pixel]));
         } else {
           lists_.insert(s.pixel, s.entry);
         }
