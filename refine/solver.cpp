@@ -131,7 +131,7 @@ void Solver::initialise() {
     emitted_flux_ += emission * hierarchy_.area(patch);
   }
   absorbed_flux_ = Rgb{};
-  incident_.assign(nodes, Rgb{});
+  received_factor_.assign(nodes, 0.0);
   // The near-field correction's table of patches, by patch id (the receivers' patch ids are the patches' nodes).
   mesh::NodeId last_patch = 0;
   for (mesh::NodeId patch : hierarchy_.patches()) last_patch = std::max(last_patch, patch);
@@ -268,13 +268,9 @@ bool Solver::shoot_once() {
   compute_form_factors(shooter, {});
 
   hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
-  // incident_ holds this shot's flux per node: clear what the previous shot wrote (not all nodes).
-  for (mesh::NodeId node : incident_written_) {
-    incident_[node] = Rgb{};
-    received_factor_[node] = 0.0;
-  }
-  incident_written_.clear();
-  incident_.resize(hierarchy_.node_count(), Rgb{});
+  // received_factor_ holds this shot's factor per node: clear what the previous shot wrote (not all nodes).
+  for (mesh::NodeId node : factor_written_) received_factor_[node] = 0.0;
+  factor_written_.clear();
   received_factor_.resize(hierarchy_.node_count(), 0.0);
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   touched_.clear();
@@ -285,9 +281,8 @@ bool Solver::shoot_once() {
     if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
     const Deposit& d = deposits_[i];  // receive(leaf, incident, 1) without the lookups
     const Rgb incident = shot_flux * ff_[i];
-    incident_[d.leaf] = incident;
     received_factor_[d.leaf] = ff_[i];
-    incident_written_.push_back(d.leaf);
+    factor_written_.push_back(d.leaf);
     deposit(d, incident, 1.0);
     touched_.push_back(static_cast<std::uint32_t>(i));
   }
@@ -416,21 +411,21 @@ std::vector<mesh::NodeId> Solver::split_candidates(std::span<const mesh::NodeId>
 // from their patches' unshot radiosity and the absorbed flux, and from the B the new leaves inherited. Returns
 // the new leaves.
 std::vector<mesh::NodeId> Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes,
-                                                         mesh::NodeId first_new) {
+                                                         mesh::NodeId first_new, const Rgb& shot_flux) {
   std::vector<mesh::NodeId> new_leaves;
   for (mesh::NodeId node = first_new; node < hierarchy_.node_count(); ++node) {
     if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
   }
-  incident_.resize(hierarchy_.node_count(), Rgb{});
   received_factor_.resize(hierarchy_.node_count(), 0.0);
   for (mesh::NodeId old_leaf : split_nodes) {
     if (old_leaf >= first_new) continue;
-    receive(old_leaf, incident_[old_leaf], -1.0);
+    receive(old_leaf, shot_flux * received_factor_[old_leaf], -1.0);
   }
   for (mesh::NodeId leaf : new_leaves) {
     mesh::NodeId ancestor = leaf;  // the node that was a leaf when the shot was received
     while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
-    const Rgb inherited_share = material(ancestor).reflectance * incident_[ancestor] / hierarchy_.area(ancestor);
+    const Rgb inherited_share = material(ancestor).reflectance * (shot_flux * received_factor_[ancestor]) /
+                                hierarchy_.area(ancestor);
     hierarchy_.radiosity(leaf) -= inherited_share;
     hierarchy_.unshot(leaf) = Rgb{};
   }
@@ -475,7 +470,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     const auto first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
     const std::vector<mesh::NodeId> split_nodes = split_candidates(candidates);
     if (split_nodes.empty()) break;
-    const std::vector<mesh::NodeId> new_leaves = take_back_split_shares(split_nodes, first_new);
+    const std::vector<mesh::NodeId> new_leaves = take_back_split_shares(split_nodes, first_new, shot_flux);
 
     // This shot again, into the new leaves only, every other receiver still occluding.
     cache_.update(hierarchy_);
@@ -493,10 +488,9 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     for (mesh::NodeId leaf : new_leaves) {
       const std::uint32_t receiver = cache_.receiver(leaf);
       if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[receiver] > 0.0)) continue;
-      incident_[leaf] = shot_flux * ff_[receiver];
       received_factor_[leaf] = ff_[receiver];
-      incident_written_.push_back(leaf);
-      receive(leaf, incident_[leaf], 1.0);
+      factor_written_.push_back(leaf);
+      receive(leaf, shot_flux * ff_[receiver], 1.0);
     }
     candidates = steep_leaves_among(new_leaves);
   }

@@ -145,7 +145,8 @@ class Solver {
   std::vector<mesh::NodeId> steep_leaves_of_shot();
   std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves) const;
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
-  std::vector<mesh::NodeId> take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new);
+  std::vector<mesh::NodeId> take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
+                                                   const Rgb& shot_flux);
   // After the near-field correction changed some of the new leaves' factors: scales the new leaves of every split
   // leaf with a corrected piece so that together they get the factor it had received.
   void share_out_corrected_factors(mesh::NodeId first_new);
@@ -167,9 +168,10 @@ class Solver {
   NearFieldCorrection near_field_;
   std::vector<double> unoccluded_;         // per receiver: the back end's factors with nothing occluding
   std::vector<double> unoccluded_sample_;  // the same, for one sample point
-  std::vector<Rgb> incident_;      // per NodeId: flux the node received in the current shot (leaves)
-  std::vector<double> received_factor_;  // per NodeId: the form factor behind incident_
-  std::vector<mesh::NodeId> incident_written_;  // the nodes whose incident_ the current shot set
+  // Per NodeId: the form factor of the current shot to the node when it received (leaves); the flux it received
+  // is the shot's flux times this factor.
+  std::vector<double> received_factor_;
+  std::vector<mesh::NodeId> factor_written_;  // the nodes whose received_factor_ the current shot set
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
   // Per receiver: edge-neighbours (receiver indices).
