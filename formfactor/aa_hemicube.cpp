@@ -39,10 +39,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   std::unique_ptr<AreaRasterizer>& raster = b.raster[static_cast<std::size_t>(task)];
   if (!raster) raster = std::make_unique<AreaRasterizer>(width, height);
   b.arena.reset(width, height);
+  b.local.resize(max_vertices);
   b.scratch.resize(clipped_capacity(max_vertices));
   b.clipped.resize(clipped_capacity(max_vertices));
   b.projected.resize(clipped_capacity(max_vertices));
-  const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
   StagedCoverageArena& arena = b.arena;
   const int half_row = face != HemicubeFace::kTop && geometry_.resolution() % 2 != 0 ? height - 1 : -1;
   // Entries offered to the arena, counted in a local (a counter in memory would chain every insertion).
@@ -52,10 +52,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const auto column_height = static_cast<std::size_t>(height);
   unoccluded.clear();
 
-  for (std::size_t i = 0; i < receivers.size(); ++i) {
-    if ((prepared_.face_mask(i) & bit) == 0 || !may_reach(t, geometry_.resolution(), prepared_.local_polygon(i)))
-      continue;
-    const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
+  prepared_.task_receivers(t, geometry_.resolution(), b.candidates);
+  for (const std::uint32_t i : b.candidates) {
+    const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
+                                       b.clipped);
     if (m == 0) continue;
     ProjectedBox box;
     if (!project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, shift, b.projected, box) ||
@@ -63,7 +63,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       continue;  // degenerate, or nothing in this task's columns
     InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
-    const auto receiver = static_cast<std::uint32_t>(i);
+    const std::uint32_t receiver = i;
     const std::uint32_t surface = receivers.surface(i);
     // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is taken at one point of the
     // pixel (its centre moved into the receiver's bounding box) and 1/depth is affine, so over the pixel it stays

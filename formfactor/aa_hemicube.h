@@ -56,7 +56,8 @@ class AaHemicubeBackend final : public FormFactorBackend {
   struct FaceBuffers {
     std::array<std::unique_ptr<AreaRasterizer>, kTasks> raster;  // per task: its width x height viewport
     StagedCoverageArena arena;
-    std::vector<Vec3> scratch, clipped;
+    std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
+    std::vector<std::uint32_t> candidates;  // the receivers the task looks at (task_receivers)
     std::vector<Vec2> projected;
   };
   void shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,

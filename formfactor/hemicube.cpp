@@ -13,7 +13,7 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
-void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& receivers, std::size_t max_vertices,
+void HemicubeBackend::shoot_task(const FaceTask& task, std::size_t max_vertices,
                                  FaceBuffers& b, std::vector<double>& sums, UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
@@ -22,19 +22,19 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
   const double half = 0.5 * geometry_.resolution();
   b.inverse_depth.assign(pixels, 0.0);
   b.item.assign(pixels, kNoItem);
+  b.local.resize(max_vertices);
   b.scratch.resize(clipped_capacity(max_vertices));
   b.clipped.resize(clipped_capacity(max_vertices));
   b.projected.resize(clipped_capacity(max_vertices));
   b.crossings.resize(clipped_capacity(max_vertices));
-  const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(face));
   auto sample_y = [this, face](int row) { return geometry_.sample_y(face, row); };
   const std::span<const double> delta = geometry_.delta(face);
   unoccluded.clear();
 
-  for (std::size_t i = 0; i < receivers.size(); ++i) {
-    if ((prepared_.face_mask(i) & bit) == 0 || !may_reach(task, geometry_.resolution(), prepared_.local_polygon(i)))
-      continue;
-    const std::size_t m = clip_to_face(prepared_.local_polygon(i), face, prepared_.outside_mask(i), b.scratch, b.clipped);
+  prepared_.task_receivers(task, geometry_.resolution(), b.candidates);
+  for (const std::uint32_t i : b.candidates) {
+    const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
+                                       b.clipped);
     if (m == 0) continue;
     ProjectedBox box;
     // No sample x + 1/2 of the task's columns in [x_min, x_max): nothing to do here.
@@ -42,7 +42,7 @@ void HemicubeBackend::shoot_task(const FaceTask& task, const ReceiverView& recei
         box.x_max <= task.x0 + 0.5 || box.x_min > task.x1 - 0.5)
       continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
-    const auto item = static_cast<std::uint32_t>(i);
+    const std::uint32_t item = i;
     const auto sample = [&](int x, int y) {
       // 1 / depth of the receiver's plane at the sample, kept within the polygon's range.
       double inverse_depth = depth.at(x + 0.5, sample_y(y));
@@ -82,7 +82,7 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   run_face_tasks(tasks, prepared_, [&](int t) {
     std::vector<double>& sums = task_sums_[static_cast<std::size_t>(t)];
     sums.assign(receivers.size(), 0.0);
-    shoot_task(tasks[static_cast<std::size_t>(t)], receivers, max_vertices, buffers_.local(), sums,
+    shoot_task(tasks[static_cast<std::size_t>(t)], max_vertices, buffers_.local(), sums,
                task_unoccluded_[static_cast<std::size_t>(t)]);
   });
   combine_face_sums(task_sums_, subset, out);

@@ -94,11 +94,12 @@ class HemicubeBackend final : public FormFactorBackend {
   struct FaceBuffers {
     std::vector<double> inverse_depth;  // per pixel; 0 = nothing seen yet
     std::vector<std::uint32_t> item;    // per pixel: receiver index
-    std::vector<Vec3> scratch, clipped;
+    std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
+    std::vector<std::uint32_t> candidates;  // the receivers the task looks at (task_receivers)
     std::vector<Vec2> projected;
     std::vector<ScanCrossing> crossings;
   };
-  void shoot_task(const FaceTask& task, const ReceiverView& receivers, std::size_t max_vertices,
+  void shoot_task(const FaceTask& task, std::size_t max_vertices,
                   FaceBuffers& buffers, std::vector<double>& sums, UnoccludedList& unoccluded) const;
 
   HemicubeGeometry geometry_;

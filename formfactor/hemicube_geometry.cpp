@@ -161,12 +161,6 @@ Vec3 to_local(const Shooter& shooter, const Vec3& p) {
   return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
 }
 
-Plane plane_to_local(const Shooter& shooter, const Plane& plane) {
-  const Vec3& n = plane.normal;
-  return Plane{{glm::dot(n, shooter.tangent), glm::dot(n, shooter.bitangent), glm::dot(n, shooter.normal)},
-               plane.signed_distance(shooter.centre)};
-}
-
 bool faces_point(const Plane& plane, const Vec3& centre) {
   return sign_of_linear(plane.normal, plane.d, centre) == Sign::kPositive;
 }
@@ -219,7 +213,9 @@ std::uint32_t frustum_outcode(const Vec3& local) {
   const auto neg = [](double x, int k) { return static_cast<std::uint32_t>(x < 0.0) << k; };
   const auto pos = [](double x, int k) { return static_cast<std::uint32_t>(x > 0.0) << k; };
   const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0) * 0x88880u;  // bit 3 of every side face
-  return below |
+  const std::uint32_t halves = (static_cast<std::uint32_t>(!(u > 0.0)) * kOutcodeUNotPositive) |
+                               (static_cast<std::uint32_t>(!(u < 0.0)) * kOutcodeUNotNegative);
+  return below | halves |
          neg(a, 0) | neg(b, 1) | neg(c, 2) | neg(d, 3) |      // top: w - u, w + u, w - v, w + v
          neg(e, 4) | neg(f, 5) | pos(a, 6) |                  // +u: u - v, u + v, u - w
          pos(f, 8) | pos(e, 9) | pos(b, 10) |                 // -u: -u - v, -u + v, -u - w
@@ -266,14 +262,14 @@ std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face,
 void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
   const std::size_t count = receivers.size();
   const std::span<const Vec3> points = receivers.points();
-  const std::span<const std::uint32_t> corner_points = receivers.corner_points();
+  shooter_ = shooter;
   offsets_ = receivers.offsets();
+  corner_points_ = receivers.corner_points();
+  planes_ = receivers.planes();
   point_local_.resize(points.size());
   point_code_.resize(points.size());
-  local_.resize(receivers.vertices().size());
   outside_.resize(count);
   face_mask_.resize(count);
-  local_planes_.resize(count);
 
   cull_back_faces(shooter.centre, receivers, patch_state_, front_);
   std::array<std::atomic<std::size_t>, kHemicubeFaces> face_receivers{};
@@ -296,14 +292,11 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
       }
       std::uint32_t all = ~0u, any = 0u;
       for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
-        const std::uint32_t point = corner_points[v];
-        local_[v] = point_local_[point];
-        const std::uint32_t code = point_code_[point];
+        const std::uint32_t code = point_code_[corner_points_[v]];
         all &= code;
         any |= code;
       }
       outside_[i] = any;
-      local_planes_[i] = plane_to_local(shooter, receivers.plane(i));
       std::uint8_t mask = 0;
       for (int f = 0; f < kHemicubeFaces; ++f) {
         if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) {
@@ -316,6 +309,22 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
     for (std::size_t f = 0; f < faces.size(); ++f) face_receivers[f] += faces[f];
   });
   for (std::size_t f = 0; f < face_receivers.size(); ++f) face_receivers_[f] = face_receivers[f];
+}
+
+void PreparedReceivers::task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const {
+  // may_reach as one bit to require (none off the top face, nor on the right half for odd N).
+  std::uint32_t half = 0;
+  if (task.face == HemicubeFace::kTop)
+    half = task.x0 == 0 ? kOutcodeUNotPositive : (resolution % 2 != 0 ? 0 : kOutcodeUNotNegative);
+  const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(task.face));
+  const std::size_t count = face_mask_.size();
+  out.resize(count);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    out[n] = static_cast<std::uint32_t>(i);
+    n += static_cast<std::size_t>(((face_mask_[i] & bit) != 0) & ((outside_[i] & half) == half));
+  }
+  out.resize(n);
 }
 
 void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,

@@ -111,7 +111,11 @@ inline Vec3 to_face(HemicubeFace face, const Vec3& q) {
 }
 // A receiver plane in local coordinates: normal rotated into the frame, d = signed distance of the shooter's
 // centre (positive when the centre is on the front side).
-Plane plane_to_local(const Shooter& shooter, const Plane& plane);
+inline Plane plane_to_local(const Shooter& shooter, const Plane& plane) {
+  const Vec3& n = plane.normal;
+  return Plane{{glm::dot(n, shooter.tangent), glm::dot(n, shooter.bitangent), glm::dot(n, shooter.normal)},
+               plane.signed_distance(shooter.centre)};
+}
 
 // Back-face culling (paper, section 3.2): whether the front side of `plane` strictly contains `centre`,
 // decided exactly (sign_of_linear).
@@ -124,9 +128,12 @@ void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vec
                      std::vector<std::uint8_t>& front);
 
 // Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
-// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side).
+// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). Two more
+// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (may_reach).
 std::uint32_t frustum_outcode(const Vec3& local);
 inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
+inline constexpr std::uint32_t kOutcodeUNotPositive = 1u << 20;  // !(u > 0)
+inline constexpr std::uint32_t kOutcodeUNotNegative = 1u << 21;  // !(u < 0)
 
 // Largest number of vertices clip_to_face can return for an m-gon: every plane adds at most one.
 inline constexpr std::size_t clipped_capacity(std::size_t m) { return m + 4; }
@@ -195,37 +202,6 @@ inline InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, d
   return r;
 }
 
-// Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
-// receiver may reach. Reused across shots without reallocating once warmed up.
-class PreparedReceivers {
- public:
-  // Fills everything for `shooter` over all receivers (all occlude); parallel over receivers, deterministic.
-  void prepare(const Shooter& shooter, const ReceiverView& receivers);
-
-  std::span<const Vec3> local_polygon(std::size_t i) const {
-    return {local_.data() + offsets_[i], local_.data() + offsets_[i + 1]};
-  }
-  // Bit f set when receiver i is not culled and may touch face f.
-  std::uint8_t face_mask(std::size_t i) const { return face_mask_[i]; }
-  // OR of the outcodes of receiver i's vertices.
-  std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
-  const Plane& local_plane(std::size_t i) const { return local_planes_[i]; }
-  // Number of receivers that may touch face f (a cheap estimate of the face's work).
-  std::size_t face_receivers(HemicubeFace face) const { return face_receivers_[static_cast<std::size_t>(face)]; }
-
- private:
-  std::span<const std::uint32_t> offsets_;
-  std::vector<Vec3> point_local_;           // per point of the view: local coordinates
-  std::vector<std::uint32_t> point_code_;   // per point: frustum_outcode
-  std::vector<Vec3> local_;                 // per corner: its point's local coordinates
-  std::vector<std::uint32_t> outside_;
-  std::vector<std::uint8_t> face_mask_;
-  std::vector<Plane> local_planes_;
-  std::vector<std::uint8_t> patch_state_;
-  std::vector<std::uint8_t> front_;
-  std::array<std::size_t, kHemicubeFaces> face_receivers_{};
-};
-
 // Columns [x0, x1) of one face: the unit of parallel work of both hemicubes. The top face has twice the pixels of
 // a side face, so it is cut into its left and right column halves: six tasks of a side face's size, which two
 // threads share evenly (five faces did not: the top face alone took as long as the four sides).
@@ -241,18 +217,54 @@ inline std::array<FaceTask, kFaceTasks> face_tasks(int resolution) {
           FaceTask{HemicubeFace::kPosV, 0, n},    FaceTask{HemicubeFace::kNegV, 0, n}};
 }
 
-// Whether a receiver (its vertices in local coordinates) may cover part of the task's columns: a cheap test before
+// Whether a receiver (the OR of its vertices' outcodes) may cover part of the task's columns: a cheap test before
 // clipping. The top face's column x = (u / w + 1) N / 2 splits at u = 0 for even N, and clipping keeps u within
 // the vertices' range (new vertices lie on edges), so a receiver with u > 0 at every vertex has nothing in the left
 // half, and one with u < 0 everywhere nothing in the right half (even N; odd N splits off the axis).
-inline bool may_reach(const FaceTask& task, int resolution, std::span<const Vec3> local_polygon) {
+inline bool may_reach(const FaceTask& task, int resolution, std::uint32_t outside_mask) {
   if (task.face != HemicubeFace::kTop) return true;
-  const bool left = task.x0 == 0;
-  if (!left && resolution % 2 != 0) return true;
-  for (const Vec3& q : local_polygon)
-    if (left ? !(q.x > 0.0) : !(q.x < 0.0)) return true;
-  return false;
+  if (task.x0 == 0) return (outside_mask & kOutcodeUNotPositive) != 0;
+  return resolution % 2 != 0 || (outside_mask & kOutcodeUNotNegative) != 0;
 }
+
+// Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
+// receiver may reach. Reused across shots without reallocating once warmed up.
+class PreparedReceivers {
+ public:
+  // Fills everything for `shooter` over all receivers (all occlude); parallel over receivers, deterministic.
+  void prepare(const Shooter& shooter, const ReceiverView& receivers);
+
+  // Receiver i's vertices in local coordinates, copied into `buffer` (room for its corners).
+  std::span<const Vec3> local_polygon(std::size_t i, std::span<Vec3> buffer) const {
+    const std::size_t first = offsets_[i], count = offsets_[i + 1] - first;
+    for (std::size_t k = 0; k < count; ++k) buffer[k] = point_local_[corner_points_[first + k]];
+    return buffer.first(count);
+  }
+  // Bit f set when receiver i is not culled and may touch face f.
+  std::uint8_t face_mask(std::size_t i) const { return face_mask_[i]; }
+  // OR of the outcodes of receiver i's vertices.
+  std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
+  // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
+  Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
+  // The receivers that may touch the task's columns (face_mask and may_reach), in order, into `out`: a pass
+  // without branches, so the task's loop does not mispredict on every other receiver.
+  void task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
+  // Number of receivers that may touch face f (a cheap estimate of the face's work).
+  std::size_t face_receivers(HemicubeFace face) const { return face_receivers_[static_cast<std::size_t>(face)]; }
+
+ private:
+  Shooter shooter_;
+  std::span<const std::uint32_t> offsets_;
+  std::span<const std::uint32_t> corner_points_;
+  std::span<const Plane> planes_;
+  std::vector<Vec3> point_local_;           // per point of the view: local coordinates
+  std::vector<std::uint32_t> point_code_;   // per point: frustum_outcode
+  std::vector<std::uint32_t> outside_;
+  std::vector<std::uint8_t> face_mask_;
+  std::vector<std::uint8_t> patch_state_;
+  std::vector<std::uint8_t> front_;
+  std::array<std::size_t, kHemicubeFaces> face_receivers_{};
+};
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
 // add_unoccluded). Added up in task order, so the sums do not depend on the number of threads.

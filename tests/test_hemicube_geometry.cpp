@@ -171,7 +171,7 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
 TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
   // Bit 4 f + k of frustum_outcode is set exactly when the point is outside plane k of face f, in that face's
   // coordinates (a, l1, l2): a - l1, a + l1, a - l2, and a + l2 on the top or l2 on a side, negative. Points on
-  // the planes (a == +-l) and on the horizon (w == 0, +-0.0) included.
+  // the planes (a == +-l) and on the horizon (w == 0, +-0.0) included. Two more bits: u <= 0 and u >= 0.
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   std::vector<Vec3> points;
@@ -194,6 +194,9 @@ TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
       const bool outside[4] = {p.x - p.y < 0.0, p.x + p.y < 0.0, p.x - p.z < 0.0, (top ? p.x + p.z : p.z) < 0.0};
       for (int k = 0; k < 4; ++k) EXPECT_EQ(((code >> (4 * f + k)) & 1u) != 0, outside[k]) << f << " " << k;
     }
+    // The sides of u = 0, where the top face's column halves meet (u = +-0.0 is on both).
+    EXPECT_EQ((code & kOutcodeUNotPositive) != 0, !(q.x > 0.0));
+    EXPECT_EQ((code & kOutcodeUNotNegative) != 0, !(q.x < 0.0));
   }
 }
 
