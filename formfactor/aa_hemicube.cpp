@@ -29,8 +29,9 @@ std::size_t AaHemicubeBackend::last_entries() const {
   return sum;
 }
 
-void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices,
-                                   FaceBuffers& b, std::vector<double>& sums, UnoccludedList& unoccluded) {
+void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
+                                   std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
+                                   UnoccludedList& unoccluded) {
   const FaceTask& t = tasks_[static_cast<std::size_t>(task)];
   const HemicubeFace face = t.face;
   // The task's viewport: columns [t.x0, t.x1) of the face, shifted to start at 0.
@@ -52,8 +53,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const auto column_height = static_cast<std::size_t>(height);
   unoccluded.clear();
 
-  prepared_.task_receivers(t, geometry_.resolution(), b.candidates);
-  for (const std::uint32_t i : b.candidates) {
+  for (const std::uint32_t i : candidates) {
     const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
                                        b.clipped);
     if (m == 0) continue;
@@ -112,19 +112,21 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       run_sum += contribution;
     }
   });
-  sums[run_receiver] += run_sum;
+  if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
+  sums_.start(receivers.size());
   run_face_tasks(tasks_, prepared_, [&](int task) {
-    std::vector<double>& sums = task_sums_[static_cast<std::size_t>(task)];
-    sums.assign(receivers.size(), 0.0);
-    shoot_task(task, receivers, max_vertices, buffers_.local(), sums, task_unoccluded_[static_cast<std::size_t>(task)]);
+    std::vector<std::uint32_t>& candidates = sums_.receivers(task);
+    prepared_.task_receivers(tasks_[static_cast<std::size_t>(task)], geometry_.resolution(), candidates);
+    shoot_task(task, receivers, candidates, max_vertices, buffers_.local(), sums_.sums(task),
+               task_unoccluded_[static_cast<std::size_t>(task)]);
   });
-  combine_face_sums(task_sums_, subset, out);
+  sums_.combine(subset, out);
 }
 
 bool AaHemicubeBackend::add_unoccluded(std::span<double> out) const {

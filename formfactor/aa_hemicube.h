@@ -57,18 +57,17 @@ class AaHemicubeBackend final : public FormFactorBackend {
     std::array<std::unique_ptr<AreaRasterizer>, kTasks> raster;  // per task: its width x height viewport
     StagedCoverageArena arena;
     std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
-    std::vector<std::uint32_t> candidates;  // the receivers the task looks at (task_receivers)
     std::vector<Vec2> projected;
   };
-  void shoot_task(int task, const ReceiverView& receivers, std::size_t max_vertices, FaceBuffers& buffers,
-                  std::vector<double>& sums, UnoccludedList& unoccluded);
+  void shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
+                  std::size_t max_vertices, FaceBuffers& buffers, std::span<double> sums, UnoccludedList& unoccluded);
 
   HemicubeGeometry geometry_;
   // Delta form factors of every face in the arena's column-major order (pixel (x, y) at x * height + y).
   std::array<std::vector<double>, kHemicubeFaces> column_weight_;
   PreparedReceivers prepared_;
   std::array<FaceTask, kTasks> tasks_;
-  std::array<std::vector<double>, kTasks> task_sums_;
+  TaskSums sums_;
   std::array<UnoccludedList, kTasks> task_unoccluded_;
   std::span<const std::uint8_t> keep_unoccluded_;
   std::array<std::size_t, kTasks> task_entries_{};

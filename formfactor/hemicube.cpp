@@ -13,8 +13,9 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
-void HemicubeBackend::shoot_task(const FaceTask& task, std::size_t max_vertices,
-                                 FaceBuffers& b, std::vector<double>& sums, UnoccludedList& unoccluded) const {
+void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
+                                 std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
+                                 UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
   const int face_width = geometry_.width(face), width = task.x1 - task.x0, height = geometry_.height(face);
@@ -31,8 +32,7 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::size_t max_vertices,
   const std::span<const double> delta = geometry_.delta(face);
   unoccluded.clear();
 
-  prepared_.task_receivers(task, geometry_.resolution(), b.candidates);
-  for (const std::uint32_t i : b.candidates) {
+  for (const std::uint32_t i : candidates) {
     const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
                                        b.clipped);
     if (m == 0) continue;
@@ -79,13 +79,14 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
+  sums_.start(receivers.size());
   run_face_tasks(tasks, prepared_, [&](int t) {
-    std::vector<double>& sums = task_sums_[static_cast<std::size_t>(t)];
-    sums.assign(receivers.size(), 0.0);
-    shoot_task(tasks[static_cast<std::size_t>(t)], max_vertices, buffers_.local(), sums,
+    std::vector<std::uint32_t>& candidates = sums_.receivers(t);
+    prepared_.task_receivers(tasks[static_cast<std::size_t>(t)], geometry_.resolution(), candidates);
+    shoot_task(tasks[static_cast<std::size_t>(t)], candidates, max_vertices, buffers_.local(), sums_.sums(t),
                task_unoccluded_[static_cast<std::size_t>(t)]);
   });
-  combine_face_sums(task_sums_, subset, out);
+  sums_.combine(subset, out);
 }
 
 bool HemicubeBackend::add_unoccluded(std::span<double> out) const {

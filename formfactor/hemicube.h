@@ -95,16 +95,15 @@ class HemicubeBackend final : public FormFactorBackend {
     std::vector<double> inverse_depth;  // per pixel; 0 = nothing seen yet
     std::vector<std::uint32_t> item;    // per pixel: receiver index
     std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
-    std::vector<std::uint32_t> candidates;  // the receivers the task looks at (task_receivers)
     std::vector<Vec2> projected;
     std::vector<ScanCrossing> crossings;
   };
-  void shoot_task(const FaceTask& task, std::size_t max_vertices,
-                  FaceBuffers& buffers, std::vector<double>& sums, UnoccludedList& unoccluded) const;
+  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates, std::size_t max_vertices,
+                  FaceBuffers& buffers, std::span<double> sums, UnoccludedList& unoccluded) const;
 
   HemicubeGeometry geometry_;
   PreparedReceivers prepared_;
-  std::array<std::vector<double>, kFaceTasks> task_sums_;
+  TaskSums sums_;
   std::array<UnoccludedList, kFaceTasks> task_unoccluded_;
   std::span<const std::uint8_t> keep_unoccluded_;
   tbb::enumerable_thread_specific<FaceBuffers> buffers_;

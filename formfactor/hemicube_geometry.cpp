@@ -119,21 +119,29 @@ void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const Prepare
   }, tbb::simple_partitioner());
 }
 
-void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span<const std::uint32_t> subset,
-                       std::span<double> out) {
-  auto combine = [&](std::size_t i) {
-    double sum = 0.0;
-    for (const std::vector<double>& face : face_sums) sum += face[i];
-    out[i] = sum;
-  };
-  if (subset.empty()) {  // every receiver: in parallel (each one's sum is the same whatever the thread count)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) combine(i);
-                      });
+void TaskSums::start(std::size_t receivers) {
+  if (!clean_ || sums_[0].size() != receivers)
+    for (std::vector<double>& sums : sums_) sums.assign(receivers, 0.0);
+  clean_ = false;
+}
+
+void TaskSums::combine(std::span<const std::uint32_t> subset, std::span<double> out) {
+  if (subset.empty()) {
+    // A task that does not list i has sums[i] == 0, and adding +0 changes no sum: the same numbers as adding
+    // every task's entry in order.
+    std::fill(out.begin(), out.end(), 0.0);
+    for (std::size_t k = 0; k < sums_.size(); ++k)
+      for (const std::uint32_t i : receivers_[k]) out[i] += sums_[k][i];
   } else {
-    for (std::uint32_t i : subset) combine(i);
+    for (const std::uint32_t i : subset) {
+      double sum = 0.0;
+      for (const std::vector<double>& sums : sums_) sum += sums[i];
+      out[i] = sum;
+    }
   }
+  for (std::size_t k = 0; k < sums_.size(); ++k)
+    for (const std::uint32_t i : receivers_[k]) sums_[k][i] = 0.0;
+  clean_ = true;
 }
 
 void check_resolution(int resolution) {

@@ -281,10 +281,25 @@ inline void add_unoccluded_lists(std::span<const UnoccludedList> lists, std::spa
 // the order changes no number.
 void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const PreparedReceivers& prepared,
                     const std::function<void(int)>& run);
-// out[i] = the partial sums of the faces (or of a back end's tasks) added in order (deterministic whatever the
-// thread count), for every i of `subset` (every receiver when it is empty).
-void combine_face_sums(std::span<const std::vector<double>> face_sums, std::span<const std::uint32_t> subset,
-                       std::span<double> out);
+// The partial form factors of a shot's face tasks: per task, a sum per receiver, and the receivers the task may
+// add to (its PreparedReceivers::task_receivers). Combined in task order, so the result does not depend on the
+// thread count; only the listed entries are read and cleared again, not every task's whole array.
+class TaskSums {
+ public:
+  // Every task's sums zero and `receivers` long (cleared in full only when the size changed, or when the last
+  // shot did not reach combine()).
+  void start(std::size_t receivers);
+  std::span<double> sums(int task) { return sums_[static_cast<std::size_t>(task)]; }
+  std::vector<std::uint32_t>& receivers(int task) { return receivers_[static_cast<std::size_t>(task)]; }
+  // out[i] = the tasks' sums added in task order, for every i of `subset` (every receiver when it is empty);
+  // leaves every sum zero again.
+  void combine(std::span<const std::uint32_t> subset, std::span<double> out);
+
+ private:
+  std::array<std::vector<double>, kFaceTasks> sums_;
+  std::array<std::vector<std::uint32_t>, kFaceTasks> receivers_;
+  bool clean_ = false;
+};
 
 // Checks a resolution for the back ends; throws aarad::Error naming the accepted range.
 void check_resolution(int resolution);
