@@ -320,10 +320,7 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
 }
 
 void PreparedReceivers::task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const {
-  // may_reach as one bit to require (none off the top face, nor on the right half for odd N).
-  std::uint32_t half = 0;
-  if (task.face == HemicubeFace::kTop)
-    half = task.x0 == 0 ? kOutcodeUNotPositive : (resolution % 2 != 0 ? 0 : kOutcodeUNotNegative);
+  const std::uint32_t half = half_bit(task, resolution);
   const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(task.face));
   const std::size_t count = face_mask_.size();
   out.resize(count);

@@ -129,7 +129,7 @@ void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vec
 
 // Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
 // (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). Two more
-// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (may_reach).
+// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (half_bit).
 std::uint32_t frustum_outcode(const Vec3& local);
 inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
 inline constexpr std::uint32_t kOutcodeUNotPositive = 1u << 20;  // !(u > 0)
@@ -217,14 +217,15 @@ inline std::array<FaceTask, kFaceTasks> face_tasks(int resolution) {
           FaceTask{HemicubeFace::kPosV, 0, n},    FaceTask{HemicubeFace::kNegV, 0, n}};
 }
 
-// Whether a receiver (the OR of its vertices' outcodes) may cover part of the task's columns: a cheap test before
-// clipping. The top face's column x = (u / w + 1) N / 2 splits at u = 0 for even N, and clipping keeps u within
-// the vertices' range (new vertices lie on edges), so a receiver with u > 0 at every vertex has nothing in the left
-// half, and one with u < 0 everywhere nothing in the right half (even N; odd N splits off the axis).
-inline bool may_reach(const FaceTask& task, int resolution, std::uint32_t outside_mask) {
-  if (task.face != HemicubeFace::kTop) return true;
-  if (task.x0 == 0) return (outside_mask & kOutcodeUNotPositive) != 0;
-  return resolution % 2 != 0 || (outside_mask & kOutcodeUNotNegative) != 0;
+// The outcode bit a receiver of the task's face needs (in the OR of its vertices' outcodes) to cover part of the
+// task's columns, or 0 when every receiver of the face may: a cheap test before clipping. The top face's column
+// x = (u / w + 1) N / 2 splits at u = 0 for even N, and clipping keeps u within the vertices' range (new vertices
+// lie on edges), so a receiver with u > 0 at every vertex has nothing in the left half, and one with u < 0
+// everywhere nothing in the right half (even N; odd N splits off the axis).
+inline std::uint32_t half_bit(const FaceTask& task, int resolution) {
+  if (task.face != HemicubeFace::kTop) return 0;
+  if (task.x0 == 0) return kOutcodeUNotPositive;
+  return resolution % 2 != 0 ? 0 : kOutcodeUNotNegative;
 }
 
 // Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
@@ -246,7 +247,7 @@ class PreparedReceivers {
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
-  // The receivers that may touch the task's columns (face_mask and may_reach), in order, into `out`: a pass
+  // The receivers that may touch the task's columns (face_mask and half_bit), in order, into `out`: a pass
   // without branches, so the task's loop does not mispredict on every other receiver.
   void task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
   // Number of receivers that may touch face f (a cheap estimate of the face's work).
