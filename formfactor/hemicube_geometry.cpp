@@ -312,6 +312,8 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
           ++faces[static_cast<std::size_t>(f)];
         }
       }
+      if ((any & kOutcodeUNotPositive) != 0) mask |= kMaskUNotPositive;
+      if ((any & kOutcodeUNotNegative) != 0) mask |= kMaskUNotNegative;
       face_mask_[i] = mask;
     }
     for (std::size_t f = 0; f < faces.size(); ++f) face_receivers[f] += faces[f];
@@ -320,14 +322,13 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
 }
 
 void PreparedReceivers::task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const {
-  const std::uint32_t half = half_bit(task, resolution);
-  const auto bit = static_cast<std::uint8_t>(1u << static_cast<int>(task.face));
+  const std::uint8_t need = task_mask(task, resolution);
   const std::size_t count = face_mask_.size();
   out.resize(count);
   std::size_t n = 0;
   for (std::size_t i = 0; i < count; ++i) {
     out[n] = static_cast<std::uint32_t>(i);
-    n += static_cast<std::size_t>(((face_mask_[i] & bit) != 0) & ((outside_[i] & half) == half));
+    n += static_cast<std::size_t>((face_mask_[i] & need) == need);
   }
   out.resize(n);
 }

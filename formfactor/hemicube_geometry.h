@@ -129,7 +129,7 @@ void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vec
 
 // Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
 // (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). Two more
-// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (half_bit).
+// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (task_mask).
 std::uint32_t frustum_outcode(const Vec3& local);
 inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
 inline constexpr std::uint32_t kOutcodeUNotPositive = 1u << 20;  // !(u > 0)
@@ -217,15 +217,20 @@ inline std::array<FaceTask, kFaceTasks> face_tasks(int resolution) {
           FaceTask{HemicubeFace::kPosV, 0, n},    FaceTask{HemicubeFace::kNegV, 0, n}};
 }
 
-// The outcode bit a receiver of the task's face needs (in the OR of its vertices' outcodes) to cover part of the
-// task's columns, or 0 when every receiver of the face may: a cheap test before clipping. The top face's column
+// Bits of PreparedReceivers::face_mask after the five faces': some vertex of the receiver has u <= 0, or u >= 0
+// (from the outcodes' kOutcodeUNotPositive and kOutcodeUNotNegative).
+inline constexpr std::uint8_t kMaskUNotPositive = 1u << 5;
+inline constexpr std::uint8_t kMaskUNotNegative = 1u << 6;
+// The bits a receiver's face_mask needs, all of them, to cover part of the task's columns: its face, and on the top
+// face the side of u = 0 of the task's half: a cheap test before clipping. The top face's column
 // x = (u / w + 1) N / 2 splits at u = 0 for even N, and clipping keeps u within the vertices' range (new vertices
 // lie on edges), so a receiver with u > 0 at every vertex has nothing in the left half, and one with u < 0
 // everywhere nothing in the right half (even N; odd N splits off the axis).
-inline std::uint32_t half_bit(const FaceTask& task, int resolution) {
-  if (task.face != HemicubeFace::kTop) return 0;
-  if (task.x0 == 0) return kOutcodeUNotPositive;
-  return resolution % 2 != 0 ? 0 : kOutcodeUNotNegative;
+inline std::uint8_t task_mask(const FaceTask& task, int resolution) {
+  const auto face = static_cast<std::uint8_t>(1u << static_cast<int>(task.face));
+  if (task.face != HemicubeFace::kTop) return face;
+  if (task.x0 == 0) return face | kMaskUNotPositive;
+  return resolution % 2 != 0 ? face : face | kMaskUNotNegative;
 }
 
 // Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
@@ -241,14 +246,14 @@ class PreparedReceivers {
     for (std::size_t k = 0; k < count; ++k) buffer[k] = point_local_[corner_points_[first + k]];
     return buffer.first(count);
   }
-  // Bit f set when receiver i is not culled and may touch face f.
+  // Bit f set when receiver i is not culled and may touch face f; kMaskUNotPositive and kMaskUNotNegative.
   std::uint8_t face_mask(std::size_t i) const { return face_mask_[i]; }
   // OR of the outcodes of receiver i's vertices.
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
-  // The receivers that may touch the task's columns (face_mask and half_bit), in order, into `out`: a pass
-  // without branches, so the task's loop does not mispredict on every other receiver.
+  // The receivers that may touch the task's columns (their face_mask has the task_mask), in order, into `out`: a
+  // pass without branches, so the task's loop does not mispredict on every other receiver.
   void task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
   // Number of receivers that may touch face f (a cheap estimate of the face's work).
   std::size_t face_receivers(HemicubeFace face) const { return face_receivers_[static_cast<std::size_t>(face)]; }
