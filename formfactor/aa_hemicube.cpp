@@ -119,11 +119,9 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
-  sums_.start(receivers.size());
-  run_face_tasks(tasks_, prepared_, [&](int task) {
-    std::vector<std::uint32_t>& candidates = sums_.receivers(task);
-    prepared_.task_receivers(tasks_[static_cast<std::size_t>(task)], geometry_.resolution(), candidates);
-    shoot_task(task, receivers, candidates, max_vertices, buffers_.local(), sums_.sums(task),
+  sums_.start(tasks_, geometry_.resolution(), prepared_, receivers.size());
+  run_face_tasks(sums_.loads(), [&](int task) {
+    shoot_task(task, receivers, sums_.receivers(task), max_vertices, buffers_.local(), sums_.sums(task),
                task_unoccluded_[static_cast<std::size_t>(task)]);
   });
   sums_.combine(subset, out);

@@ -79,11 +79,9 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
-  sums_.start(receivers.size());
-  run_face_tasks(tasks, prepared_, [&](int t) {
-    std::vector<std::uint32_t>& candidates = sums_.receivers(t);
-    prepared_.task_receivers(tasks[static_cast<std::size_t>(t)], geometry_.resolution(), candidates);
-    shoot_task(tasks[static_cast<std::size_t>(t)], candidates, max_vertices, buffers_.local(), sums_.sums(t),
+  sums_.start(tasks, geometry_.resolution(), prepared_, receivers.size());
+  run_face_tasks(sums_.loads(), [&](int t) {
+    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), max_vertices, buffers_.local(), sums_.sums(t),
                task_unoccluded_[static_cast<std::size_t>(t)]);
   });
   sums_.combine(subset, out);

@@ -99,18 +99,11 @@ double HemicubeGeometry::total() const {
   return sum;
 }
 
-void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const PreparedReceivers& prepared,
-                    const std::function<void(int)>& run) {
-  std::array<double, kFaceTasks> load{};
+void run_face_tasks(const std::array<std::size_t, kFaceTasks>& loads, const std::function<void(int)>& run) {
   std::array<int, kFaceTasks> order{};
-  for (int k = 0; k < kFaceTasks; ++k) {
-    const FaceTask& t = tasks[static_cast<std::size_t>(k)];
-    const double tasks_of_face = t.face == HemicubeFace::kTop ? 2.0 : 1.0;
-    load[static_cast<std::size_t>(k)] = static_cast<double>(prepared.face_receivers(t.face)) / tasks_of_face;
-    order[static_cast<std::size_t>(k)] = k;
-  }
+  for (int k = 0; k < kFaceTasks; ++k) order[static_cast<std::size_t>(k)] = k;
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return load[static_cast<std::size_t>(a)] > load[static_cast<std::size_t>(b)];
+    return loads[static_cast<std::size_t>(a)] > loads[static_cast<std::size_t>(b)];
   });
   std::atomic<int> next{0};
   const int workers = std::min(kFaceTasks, tbb::this_task_arena::max_concurrency());
@@ -119,10 +112,20 @@ void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const Prepare
   }, tbb::simple_partitioner());
 }
 
-void TaskSums::start(std::size_t receivers) {
+void TaskSums::start(const std::array<FaceTask, kFaceTasks>& tasks, int resolution, const PreparedReceivers& prepared,
+                     std::size_t receivers) {
   if (!clean_ || sums_[0].size() != receivers)
     for (std::vector<double>& sums : sums_) sums.assign(receivers, 0.0);
   clean_ = false;
+  tbb::parallel_for(0, kFaceTasks, [&](int k) {
+    prepared.task_receivers(tasks[static_cast<std::size_t>(k)], resolution, receivers_[static_cast<std::size_t>(k)]);
+  });
+}
+
+std::array<std::size_t, kFaceTasks> TaskSums::loads() const {
+  std::array<std::size_t, kFaceTasks> loads{};
+  for (std::size_t k = 0; k < loads.size(); ++k) loads[k] = receivers_[k].size();
+  return loads;
 }
 
 void TaskSums::combine(std::span<const std::uint32_t> subset, std::span<double> out) {
@@ -280,7 +283,6 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
   face_mask_.resize(count);
 
   cull_back_faces(shooter.centre, receivers, patch_state_, front_);
-  std::array<std::atomic<std::size_t>, kHemicubeFaces> face_receivers{};
 
   // Every point once (a vertex is a corner of up to four elements), then every receiver gathers its corners.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
@@ -292,7 +294,6 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
                       }
                     });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
-    std::array<std::size_t, kHemicubeFaces> faces{};
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       if (front_[i] == 0 || offsets_[i + 1] - offsets_[i] < 3) {
         face_mask_[i] = 0;  // culled: no face looks at its local coordinates
@@ -307,18 +308,13 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
       outside_[i] = any;
       std::uint8_t mask = 0;
       for (int f = 0; f < kHemicubeFaces; ++f) {
-        if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) {
-          mask |= static_cast<std::uint8_t>(1u << f);
-          ++faces[static_cast<std::size_t>(f)];
-        }
+        if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
       }
       if ((any & kOutcodeUNotPositive) != 0) mask |= kMaskUNotPositive;
       if ((any & kOutcodeUNotNegative) != 0) mask |= kMaskUNotNegative;
       face_mask_[i] = mask;
     }
-    for (std::size_t f = 0; f < faces.size(); ++f) face_receivers[f] += faces[f];
   });
-  for (std::size_t f = 0; f < face_receivers.size(); ++f) face_receivers_[f] = face_receivers[f];
 }
 
 void PreparedReceivers::task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const {

@@ -255,8 +255,6 @@ class PreparedReceivers {
   // The receivers that may touch the task's columns (their face_mask has the task_mask), in order, into `out`: a
   // pass without branches, so the task's loop does not mispredict on every other receiver.
   void task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
-  // Number of receivers that may touch face f (a cheap estimate of the face's work).
-  std::size_t face_receivers(HemicubeFace face) const { return face_receivers_[static_cast<std::size_t>(face)]; }
 
  private:
   Shooter shooter_;
@@ -269,7 +267,6 @@ class PreparedReceivers {
   std::vector<std::uint8_t> face_mask_;
   std::vector<std::uint8_t> patch_state_;
   std::vector<std::uint8_t> front_;
-  std::array<std::size_t, kHemicubeFaces> face_receivers_{};
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
@@ -281,22 +278,23 @@ inline void add_unoccluded_lists(std::span<const UnoccludedList> lists, std::spa
 }
 
 // Runs run(k) for k = 0 .. kFaceTasks - 1 on the threads of the current TBB arena, the tasks of most receivers
-// (prepared.face_receivers, a top-face half counted as half the top face) first: each thread takes the next
-// task when it is free, so the small ones fill in at the end (longest processing time first). Six uneven tasks
-// in index order left one thread waiting on the last big one. Each task's result depends only on the task, so
-// the order changes no number.
-void run_face_tasks(const std::array<FaceTask, kFaceTasks>& tasks, const PreparedReceivers& prepared,
-                    const std::function<void(int)>& run);
+// (loads[k]: the receivers on task k's list) first: each thread takes the next task when it is free, so the small
+// ones fill in at the end (longest processing time first). Six uneven tasks in index order left one thread
+// waiting on the last big one. Each task's result depends only on the task, so the order changes no number.
+void run_face_tasks(const std::array<std::size_t, kFaceTasks>& loads, const std::function<void(int)>& run);
 // The partial form factors of a shot's face tasks: per task, a sum per receiver, and the receivers the task may
 // add to (its PreparedReceivers::task_receivers). Combined in task order, so the result does not depend on the
 // thread count; only the listed entries are read and cleared again, not every task's whole array.
 class TaskSums {
  public:
-  // Every task's sums zero and `receivers` long (cleared in full only when the size changed, or when the last
-  // shot did not reach combine()).
-  void start(std::size_t receivers);
+  // Lists every task's receivers (in parallel) and makes every task's sums zero and as long as the view (cleared in
+  // full only when the size changed, or when the last shot did not reach combine()).
+  void start(const std::array<FaceTask, kFaceTasks>& tasks, int resolution, const PreparedReceivers& prepared,
+             std::size_t receivers);
   std::span<double> sums(int task) { return sums_[static_cast<std::size_t>(task)]; }
-  std::vector<std::uint32_t>& receivers(int task) { return receivers_[static_cast<std::size_t>(task)]; }
+  std::span<const std::uint32_t> receivers(int task) const { return receivers_[static_cast<std::size_t>(task)]; }
+  // Per task, the receivers on its list (run_face_tasks' loads).
+  std::array<std::size_t, kFaceTasks> loads() const;
   // out[i] = the tasks' sums added in task order, for every i of `subset` (every receiver when it is empty);
   // leaves every sum zero again.
   void combine(std::span<const std::uint32_t> subset, std::span<double> out);
