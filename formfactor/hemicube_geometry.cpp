@@ -284,7 +284,8 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
 
   cull_back_faces(shooter.centre, receivers, patch_state_, front_);
 
-  // Every point once (a vertex is a corner of up to four elements), then every receiver gathers its corners.
+  // Every point once (a vertex is a corner of up to four elements), then every receiver combines its corners'
+  // outcodes.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t p = range.begin(); p != range.end(); ++p) {
