@@ -30,7 +30,7 @@ std::size_t AaHemicubeBackend::last_entries() const {
 }
 
 void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
-                                   std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
+                                   std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
                                    UnoccludedList& unoccluded) {
   const FaceTask& t = tasks_[static_cast<std::size_t>(task)];
   const HemicubeFace face = t.face;
@@ -39,7 +39,6 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const double half = 0.5 * geometry_.resolution(), shift = t.x0;
   std::unique_ptr<AreaRasterizer>& raster = b.raster[static_cast<std::size_t>(task)];
   if (!raster) raster = std::make_unique<AreaRasterizer>(width, height);
-  b.arena.reset(width, height);
   b.local.resize(max_vertices);
   b.scratch.resize(clipped_capacity(max_vertices));
   b.clipped.resize(clipped_capacity(max_vertices));
@@ -53,14 +52,35 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const auto column_height = static_cast<std::size_t>(height);
   unoccluded.clear();
 
-  for (const std::uint32_t i : candidates) {
+  // Receiver i clipped and projected into b.projected, with its box; 0 vertices when it is degenerate or has nothing
+  // in this task's columns.
+  ProjectedBox box;
+  const auto place = [&](std::uint32_t i) -> std::size_t {
     const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
                                        b.clipped);
-    if (m == 0) continue;
-    ProjectedBox box;
-    if (!project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, shift, b.projected, box) ||
+    if (m == 0 || !project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, shift, b.projected, box) ||
         !(box.x_max > 0.0 && box.x_min < width))
-      continue;  // degenerate, or nothing in this task's columns
+      return 0;
+    return m;
+  };
+  // A re-shot subset: only the pixels its receivers may cover matter (TileMask).
+  const bool masked = !subset.empty();
+  if (masked) {
+    b.mask.reset(width, height);
+    const std::uint8_t need = task_mask(t, geometry_.resolution());
+    for (const std::uint32_t i : subset) {
+      if ((prepared_.face_mask(i) & need) == need && place(i) != 0) b.mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
+    }
+    if (b.mask.empty()) {
+      task_entries_[static_cast<std::size_t>(task)] = 0;
+      return;
+    }
+  }
+  b.arena.reset(width, height);
+
+  for (const std::uint32_t i : candidates) {
+    const std::size_t m = place(i);
+    if (m == 0 || (masked && !b.mask.overlaps(box.x_min, box.x_max, box.y_min, box.y_max))) continue;
     InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const std::uint32_t receiver = i;
@@ -121,7 +141,7 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   sums_.start(tasks_, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int task) {
-    shoot_task(task, receivers, sums_.receivers(task), max_vertices, buffers_.local(), sums_.sums(task),
+    shoot_task(task, receivers, sums_.receivers(task), subset, max_vertices, buffers_.local(), sums_.sums(task),
                task_unoccluded_[static_cast<std::size_t>(task)]);
   });
   sums_.combine(subset, out);

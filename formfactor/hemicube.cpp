@@ -14,15 +14,13 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
 void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
-                                 std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
+                                 std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
                                  UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
   const int face_width = geometry_.width(face), width = task.x1 - task.x0, height = geometry_.height(face);
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   const double half = 0.5 * geometry_.resolution();
-  b.inverse_depth.assign(pixels, 0.0);
-  b.item.assign(pixels, kNoItem);
   b.local.resize(max_vertices);
   b.scratch.resize(clipped_capacity(max_vertices));
   b.clipped.resize(clipped_capacity(max_vertices));
@@ -32,15 +30,34 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint
   const std::span<const double> delta = geometry_.delta(face);
   unoccluded.clear();
 
-  for (const std::uint32_t i : candidates) {
+  // Receiver i clipped and projected (face pixel coordinates) into b.projected, with its box; 0 vertices when it is
+  // degenerate or no sample x + 1/2 of the task's columns lies in [x_min, x_max).
+  ProjectedBox box;
+  const auto place = [&](std::uint32_t i) -> std::size_t {
     const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
                                        b.clipped);
-    if (m == 0) continue;
-    ProjectedBox box;
-    // No sample x + 1/2 of the task's columns in [x_min, x_max): nothing to do here.
-    if (!project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, 0.0, b.projected, box) ||
+    if (m == 0 || !project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, 0.0, b.projected, box) ||
         box.x_max <= task.x0 + 0.5 || box.x_min > task.x1 - 0.5)
-      continue;
+      return 0;
+    return m;
+  };
+  // A re-shot subset: only the pixels its receivers may cover matter (TileMask, in the task's columns).
+  const bool masked = !subset.empty();
+  if (masked) {
+    b.mask.reset(width, height);
+    const std::uint8_t need = task_mask(task, geometry_.resolution());
+    for (const std::uint32_t i : subset) {
+      if ((prepared_.face_mask(i) & need) == need && place(i) != 0)
+        b.mask.add(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max);
+    }
+    if (b.mask.empty()) return;
+  }
+  b.inverse_depth.assign(pixels, 0.0);
+  b.item.assign(pixels, kNoItem);
+
+  for (const std::uint32_t i : candidates) {
+    const std::size_t m = place(i);
+    if (m == 0 || (masked && !b.mask.overlaps(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max))) continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const std::uint32_t item = i;
     const auto sample = [&](int x, int y) {
@@ -81,7 +98,7 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
   sums_.start(tasks, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int t) {
-    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), max_vertices, buffers_.local(), sums_.sums(t),
+    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), subset, max_vertices, buffers_.local(), sums_.sums(t),
                task_unoccluded_[static_cast<std::size_t>(t)]);
   });
   sums_.combine(subset, out);

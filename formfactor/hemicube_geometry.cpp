@@ -330,6 +330,46 @@ void PreparedReceivers::task_receivers(const FaceTask& task, int resolution, std
   out.resize(n);
 }
 
+void TileMask::reset(int width, int height) {
+  width_ = width;
+  height_ = height;
+  shift_ = 0;
+  while (((width - 1) >> shift_) >= 64) ++shift_;
+  rows_.assign(static_cast<std::size_t>(((height - 1) >> shift_) + 1), 0);
+  empty_ = true;
+}
+
+bool TileMask::tiles(double lo, double hi, int size, int& t0, int& t1) const {
+  if (!(hi >= 0.0 && lo < size)) return false;  // also false for NaN
+  const int p0 = lo <= 0.0 ? 0 : static_cast<int>(lo);  // floor, as lo > 0
+  const int p1 = hi >= size ? size - 1 : static_cast<int>(hi);
+  t0 = p0 >> shift_;
+  t1 = p1 >> shift_;
+  return true;
+}
+
+namespace {
+// Bits t0 .. t1 of a row (0 <= t0 <= t1 < 64).
+std::uint64_t tile_bits(int t0, int t1) { return (~std::uint64_t{0} >> (63 - t1)) & (~std::uint64_t{0} << t0); }
+}  // namespace
+
+void TileMask::add(double x_min, double x_max, double y_min, double y_max) {
+  int x0, x1, y0, y1;
+  if (!tiles(x_min, x_max, width_, x0, x1) || !tiles(y_min, y_max, height_, y0, y1)) return;
+  const std::uint64_t bits = tile_bits(x0, x1);
+  for (int y = y0; y <= y1; ++y) rows_[static_cast<std::size_t>(y)] |= bits;
+  empty_ = false;
+}
+
+bool TileMask::overlaps(double x_min, double x_max, double y_min, double y_max) const {
+  int x0, x1, y0, y1;
+  if (!tiles(x_min, x_max, width_, x0, x1) || !tiles(y_min, y_max, height_, y0, y1)) return false;
+  const std::uint64_t bits = tile_bits(x0, x1);
+  for (int y = y0; y <= y1; ++y)
+    if ((rows_[static_cast<std::size_t>(y)] & bits) != 0) return true;
+  return false;
+}
+
 void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,
                      std::vector<std::uint8_t>& front) {
   const std::size_t count = receivers.size();

@@ -233,6 +233,27 @@ inline std::uint8_t task_mask(const FaceTask& task, int resolution) {
   return resolution % 2 != 0 ? face : face | kMaskUNotNegative;
 }
 
+// The pixels of one task that a re-shot subset's receivers may cover (backend.h: compute() for a subset), as
+// tiles of 2^k x 2^k pixels, at most 64 to a row of the mask. A pixel's coverage list or z-buffer entry depends
+// only on the receivers that reach that pixel, so a receiver whose projected box meets no marked tile changes
+// nothing the subset gets and is skipped: a re-shoot into a few new leaves rasterizes only what lies around them.
+// Boxes are in the task's pixel coordinates; the pixels a box may touch are floor(min) .. floor(max) on each axis.
+class TileMask {
+ public:
+  // An empty mask over a width x height viewport.
+  void reset(int width, int height);
+  void add(double x_min, double x_max, double y_min, double y_max);
+  bool overlaps(double x_min, double x_max, double y_min, double y_max) const;
+  bool empty() const { return empty_; }
+
+ private:
+  // Tiles [t0, t1] of the viewport's pixels [0, size) that the pixel range of [lo, hi] meets; false when none.
+  bool tiles(double lo, double hi, int size, int& t0, int& t1) const;
+  int width_ = 0, height_ = 0, shift_ = 0;
+  bool empty_ = true;
+  std::vector<std::uint64_t> rows_;  // bit t of row r: tile (t, r)
+};
+
 // Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
 // receiver may reach. Reused across shots without reallocating once warmed up.
 class PreparedReceivers {

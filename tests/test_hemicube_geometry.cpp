@@ -348,5 +348,33 @@ TEST(HemicubeGeometry, ResolutionOutOfRangeIsRefused) {
   for (const std::string& name : backend_names()) EXPECT_EQ(make_backend(name)->name(), name);
 }
 
+TEST(HemicubeGeometry, TileMaskMarksThePixelsOfItsBoxes) {
+  TileMask small;  // 50 x 30 pixels: one pixel per tile
+  small.reset(50, 30);
+  EXPECT_TRUE(small.empty());
+  EXPECT_FALSE(small.overlaps(0.0, 50.0, 0.0, 30.0));
+  small.add(10.2, 12.0, 5.5, 5.9);  // pixels 10 .. 12 of row 5 (12 is touched only at its edge: kept, to be safe)
+  EXPECT_FALSE(small.empty());
+  EXPECT_TRUE(small.overlaps(12.0, 13.5, 5.0, 5.1));
+  EXPECT_TRUE(small.overlaps(0.0, 10.0, 0.0, 29.0));
+  EXPECT_FALSE(small.overlaps(13.0, 20.0, 5.0, 6.0));  // right of it
+  EXPECT_FALSE(small.overlaps(10.0, 12.0, 6.0, 9.0));   // above it
+  EXPECT_FALSE(small.overlaps(0.0, 9.99, 0.0, 29.0));   // left of it
+  small.add(-5.0, 0.5, 28.5, 40.0);  // clamped to pixel (0, 28) .. (0, 29)
+  EXPECT_TRUE(small.overlaps(-1.0, 0.2, 29.5, 31.0));
+  EXPECT_FALSE(small.overlaps(60.0, 70.0, 0.0, 29.0));  // outside the viewport
+  EXPECT_FALSE(small.overlaps(1.0, 3.0, 28.0, 29.0));
+
+  TileMask large;  // 1000 pixels wide: 16-pixel tiles, 63 to a row
+  large.reset(1000, 500);
+  large.add(999.5, 1200.0, 499.0, 499.5);
+  EXPECT_TRUE(large.overlaps(992.0, 992.5, 496.0, 496.5));  // same tile (62, 31)
+  EXPECT_FALSE(large.overlaps(975.0, 991.9, 496.0, 499.0));  // tile 60 .. 61
+  EXPECT_FALSE(large.overlaps(992.0, 999.0, 480.0, 495.9));  // tile row 30
+  large.reset(1000, 500);
+  EXPECT_TRUE(large.empty());
+  EXPECT_FALSE(large.overlaps(992.0, 992.5, 496.0, 496.5));
+}
+
 }  // namespace
 }  // namespace aarad::formfactor
