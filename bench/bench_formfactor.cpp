@@ -11,6 +11,7 @@
 #include "formfactor/aa_hemicube.h"
 #include "formfactor/backend.h"
 #include "formfactor/hemicube.h"
+#include "formfactor/hemicube_geometry.h"
 
 #include <benchmark/benchmark.h>
 
@@ -136,6 +137,23 @@ void BM_Pair(benchmark::State& state) {
   state.counters["aa_entries"] = static_cast<double>(aa.last_entries());
 }
 
+// The per-shot preparation both hemicubes share (hemicube_geometry.h): back-face culling, every point into the
+// shooter's frame with its outcode, every receiver's face mask. Runs on the calling thread and the TBB workers.
+void BM_Prepare(benchmark::State& state) {
+  const Shot& shot = shot_for(static_cast<int>(state.range(0)));
+  // Lifted off the light's plane as the solver lifts its shooting points (refine/solver.cpp), so that the points
+  // of the light's own surface are decided by the floating-point filter, not in exact arithmetic.
+  Shooter shooter = shot.shooter;
+  shooter.centre += 1e-9 * shooter.normal;
+  PreparedReceivers prepared;
+  for (auto _ : state) {
+    prepared.prepare(shooter, shot.receivers);
+    benchmark::DoNotOptimize(prepared.face_mask(0));
+  }
+  state.SetLabel(scene_label(static_cast<int>(state.range(0))));
+  state.counters["points"] = static_cast<double>(shot.receivers.points().size());
+}
+
 void resolutions(benchmark::internal::Benchmark* b) {
   for (int scene : {0, 1})
     for (int n : {100, 300, 1000}) b->Args({scene, n});
@@ -143,6 +161,7 @@ void resolutions(benchmark::internal::Benchmark* b) {
 }
 
 BENCHMARK(BM_Pair)->Apply(resolutions);
+BENCHMARK(BM_Prepare)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->UseRealTime()->MeasureProcessCPUTime();
 BENCHMARK_CAPTURE(BM_Shot, classical, "hemicube")->Apply(resolutions);
 BENCHMARK_CAPTURE(BM_Shot, aa, "aa-hemicube")->Apply(resolutions);
 

@@ -155,21 +155,13 @@ void check_resolution(int resolution) {
   }
 }
 
-Vec3 to_local(const Shooter& shooter, const Vec3& p) {
-  const Vec3 d = p - shooter.centre;
-  // w = normal . d, with the sign of the exact side of p relative to the shooter's plane.
-  bool certain = false;
-  double w = side_of_plane_value(shooter.centre, shooter.normal, p, certain);
-  if (certain) return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
-  const Sign side = side_of_plane(shooter.centre, shooter.normal, p);
-  if (side == Sign::kZero) {
-    w = 0.0;
-  } else if (side == Sign::kPositive && !(w > 0.0)) {
-    w = std::numeric_limits<double>::min();
-  } else if (side == Sign::kNegative && !(w < 0.0)) {
-    w = -std::numeric_limits<double>::min();
+double signed_plane_distance(const Shooter& shooter, const Vec3& p, double w) {
+  switch (side_of_plane(shooter.centre, shooter.normal, p)) {
+    case Sign::kZero: return 0.0;
+    case Sign::kPositive: return w > 0.0 ? w : std::numeric_limits<double>::min();
+    case Sign::kNegative: return w < 0.0 ? w : -std::numeric_limits<double>::min();
   }
-  return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
+  return w;
 }
 
 bool faces_point(const Plane& plane, const Vec3& centre) {
@@ -213,26 +205,6 @@ inline Vec3 crossing(bool top, int k, const Vec3& p, double vp, const Vec3& q, d
 }
 
 }  // namespace
-
-std::uint32_t frustum_outcode(const Vec3& local) {
-  // face_outcode of every face, written out on (u, v, w): the same differences as through to_face, so the same
-  // exact signs, without the per-face shuffle (this runs for every mesh vertex in every shot). The twenty
-  // differences are six and their negatives: y - x is exactly -(x - y) and x + y is y + x in the rounding to
-  // nearest the program runs in (-frounding-math keeps the compiler from assuming so), so "-(x) < 0" is "x > 0".
-  const double u = local.x, v = local.y, w = local.z;
-  const double a = w - u, b = w + u, c = w - v, d = w + v, e = u - v, f = u + v;
-  const auto neg = [](double x, int k) { return static_cast<std::uint32_t>(x < 0.0) << k; };
-  const auto pos = [](double x, int k) { return static_cast<std::uint32_t>(x > 0.0) << k; };
-  const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0) * 0x88880u;  // bit 3 of every side face
-  const std::uint32_t halves = (static_cast<std::uint32_t>(!(u > 0.0)) * kOutcodeUNotPositive) |
-                               (static_cast<std::uint32_t>(!(u < 0.0)) * kOutcodeUNotNegative);
-  return below | halves |
-         neg(a, 0) | neg(b, 1) | neg(c, 2) | neg(d, 3) |      // top: w - u, w + u, w - v, w + v
-         neg(e, 4) | neg(f, 5) | pos(a, 6) |                  // +u: u - v, u + v, u - w
-         pos(f, 8) | pos(e, 9) | pos(b, 10) |                 // -u: -u - v, -u + v, -u - w
-         pos(e, 12) | neg(f, 13) | pos(c, 14) |               // +v: v - u, v + u, v - w
-         pos(f, 16) | neg(e, 17) | pos(d, 18);                // -v: -v - u, -v + u, -v - w
-}
 
 std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face, std::uint32_t outside_mask,
                          std::span<Vec3> scratch, std::span<Vec3> out) {

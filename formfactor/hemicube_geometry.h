@@ -30,6 +30,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "core/predicates.h"
 #include "formfactor/backend.h"
 #include "formfactor/receiver_view.h"
 
@@ -95,9 +96,19 @@ class HemicubeGeometry {
   std::array<std::vector<double>, kHemicubeFaces> delta_;
 };
 
+// The w of to_local for a point the floating-point filter could not sign (w: that unsure value), with its sign
+// decided by side_of_plane: 0 in the plane, else w or the smallest normal double of the exact sign.
+double signed_plane_distance(const Shooter& shooter, const Vec3& p, double w);
 // Local coordinates (u, v, w) of p in the shooter's frame. The sign of w is made exactly the sign of
-// normal . (p - centre) (side_of_plane), and w is exactly 0 when p lies in the shooter's plane.
-Vec3 to_local(const Shooter& shooter, const Vec3& p);
+// normal . (p - centre) (side_of_plane), and w is exactly 0 when p lies in the shooter's plane. Inline: it runs
+// for every mesh vertex in every shot, and almost every point is decided by the filter.
+inline Vec3 to_local(const Shooter& shooter, const Vec3& p) {
+  bool certain = false;
+  double w = side_of_plane_value(shooter.centre, shooter.normal, p, certain);
+  if (!certain) [[unlikely]] w = signed_plane_distance(shooter, p, w);
+  const Vec3 d = p - shooter.centre;
+  return {glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), w};
+}
 // Face coordinates (a, l1, l2) of a local point (see the table at the top of this file). Exact.
 inline Vec3 to_face(HemicubeFace face, const Vec3& q) {
   switch (face) {
@@ -127,13 +138,58 @@ bool faces_point(const Plane& plane, const Vec3& centre);
 void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,
                      std::vector<std::uint8_t>& front);
 
-// Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
-// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). Two more
-// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (task_mask).
-std::uint32_t frustum_outcode(const Vec3& local);
 inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
 inline constexpr std::uint32_t kOutcodeUNotPositive = 1u << 20;  // !(u > 0)
 inline constexpr std::uint32_t kOutcodeUNotNegative = 1u << 21;  // !(u < 0)
+
+namespace detail {
+// The outcode bits that difference k of frustum_outcode's (w - u, w + u, w - v, w + v, u - v, u + v) sets when it
+// is negative (negative[1 << k]) or positive (positive[1 << k]); entry m is the OR over the bits of m.
+struct OutcodeTables {
+  std::array<std::uint32_t, 64> negative{}, positive{};
+  constexpr OutcodeTables() {
+    // Where each difference's sign lands in the outcode (see frustum_outcode).
+    constexpr std::uint32_t kNegative[6] = {1u << 0, 1u << 1, 1u << 2, 1u << 3, (1u << 4) | (1u << 17),
+                                            (1u << 5) | (1u << 13)};
+    constexpr std::uint32_t kPositive[6] = {1u << 6, 1u << 10, 1u << 14, 1u << 18, (1u << 9) | (1u << 12),
+                                            (1u << 8) | (1u << 16)};
+    for (int m = 0; m < 64; ++m)
+      for (int k = 0; k < 6; ++k)
+        if ((m >> k) & 1) {
+          negative[static_cast<std::size_t>(m)] |= kNegative[k];
+          positive[static_cast<std::size_t>(m)] |= kPositive[k];
+        }
+  }
+};
+inline constexpr OutcodeTables kOutcodeTables{};
+}  // namespace detail
+
+// Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
+// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). Two more
+// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (task_mask).
+inline std::uint32_t frustum_outcode(const Vec3& local) {
+  // face_outcode of every face, written out on (u, v, w): the same differences as through to_face, so the same
+  // exact signs, without the per-face shuffle (this runs for every mesh vertex in every shot). The twenty
+  // differences are six and their negatives: y - x is exactly -(x - y) and x + y is y + x in the rounding to
+  // nearest the program runs in (-frounding-math keeps the compiler from assuming so), so "-(x) < 0" is "x > 0".
+  // Bit k of the outcode, with a = w - u, b = w + u, c = w - v, d = w + v, e = u - v, f = u + v:
+  //   top: a < 0 (0), b < 0 (1), c < 0 (2), d < 0 (3)   +u: e < 0 (4), f < 0 (5), a > 0 (6)
+  //   -u:  f > 0 (8), e > 0 (9), b > 0 (10)              +v: e > 0 (12), f < 0 (13), c > 0 (14)
+  //   -v:  f > 0 (16), e < 0 (17), d > 0 (18)            bit 3 of every side face: w < 0
+  // The six "< 0" and the six "> 0" form two 6-bit masks, mapped to their bits by detail::kOutcodeTables.
+  const double u = local.x, v = local.y, w = local.z;
+  const double a = w - u, b = w + u, c = w - v, d = w + v, e = u - v, f = u + v;
+  const unsigned negative = static_cast<unsigned>(a < 0.0) | static_cast<unsigned>(b < 0.0) << 1 |
+                            static_cast<unsigned>(c < 0.0) << 2 | static_cast<unsigned>(d < 0.0) << 3 |
+                            static_cast<unsigned>(e < 0.0) << 4 | static_cast<unsigned>(f < 0.0) << 5;
+  const unsigned positive = static_cast<unsigned>(a > 0.0) | static_cast<unsigned>(b > 0.0) << 1 |
+                            static_cast<unsigned>(c > 0.0) << 2 | static_cast<unsigned>(d > 0.0) << 3 |
+                            static_cast<unsigned>(e > 0.0) << 4 | static_cast<unsigned>(f > 0.0) << 5;
+  const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0) * 0x88880u;  // bit 3 of every side face
+  const std::uint32_t halves = (static_cast<std::uint32_t>(!(u > 0.0)) * kOutcodeUNotPositive) |
+                               (static_cast<std::uint32_t>(!(u < 0.0)) * kOutcodeUNotNegative);
+  return below | halves | detail::kOutcodeTables.negative[negative] | detail::kOutcodeTables.positive[positive];
+}
 
 // Largest number of vertices clip_to_face can return for an m-gon: every plane adds at most one.
 inline constexpr std::size_t clipped_capacity(std::size_t m) { return m + 4; }
