@@ -125,10 +125,12 @@ void Solver::initialise() {
     hierarchy_.unshot(node) = Rgb{};
   }
   emitted_flux_ = Rgb{};
+  patch_table_.clear();
   for (mesh::NodeId patch : hierarchy_.patches()) {
     const Rgb& emission = material(patch).emission;
     hierarchy_.unshot(patch) = emission;
     emitted_flux_ += emission * hierarchy_.area(patch);
+    patch_table_.push_back({patch, hierarchy_.area(patch), material(patch).reflectance});
   }
   absorbed_flux_ = Rgb{};
   received_factor_.assign(nodes, 0.0);
@@ -152,31 +154,41 @@ Rgb Solver::unshot_flux() const {
   return total;
 }
 
-Rgb Solver::unshot_magnitude(mesh::NodeId patch) const {
-  const Rgb& u = hierarchy_.unshot(patch);
-  return Rgb(std::abs(u.r), std::abs(u.g), std::abs(u.b));
-}
-
-double Solver::unshot_fraction() const {
-  const double emitted = emitted_flux_.sum();
-  if (!(emitted > 0.0)) return 0.0;
-  Rgb unshot{};  // summed per channel, then over channels, as unshot_flux().sum()
-  for (mesh::NodeId patch : hierarchy_.patches()) unshot += unshot_magnitude(patch) * hierarchy_.area(patch);
-  return unshot.sum() / emitted;
-}
-
-mesh::NodeId Solver::pick_shooter() const {
-  mesh::NodeId best = mesh::kNoNode;
+Solver::PatchScan Solver::scan_patches() const {
+  PatchScan scan;
+  Rgb unshot{};  // sum |dB| A per channel, summed over channels at the end (as unshot_flux().sum())
   double best_flux = 0.0;
-  for (mesh::NodeId patch : hierarchy_.patches()) {
-    const double flux = unshot_magnitude(patch).sum() * hierarchy_.area(patch);
+  // The ambient term's sums (Cohen et al. 1988, section 3.2).
+  Rgb reflectance_area{}, unshot_area{};
+  double area = 0.0;
+  for (const PatchEntry& patch : patch_table_) {
+    const Rgb& u = hierarchy_.unshot(patch.node);
+    const Rgb magnitude(std::abs(u.r), std::abs(u.g), std::abs(u.b));
+    unshot += magnitude * patch.area;
+    const double flux = magnitude.sum() * patch.area;
     if (flux > best_flux) {  // strict: ties go to the lowest id, deterministically
       best_flux = flux;
-      best = patch;
+      scan.shooter = patch.node;
+    }
+    reflectance_area += patch.reflectance * patch.area;
+    unshot_area += u * patch.area;
+    area += patch.area;
+  }
+  const double emitted = emitted_flux_.sum();
+  scan.unshot_fraction = emitted > 0.0 ? unshot.sum() / emitted : 0.0;
+  // R = 1 / (1 - rho_avg), ambient = R sum dB_i A_i / sum A_i.
+  if (area > 0.0) {
+    for (int c = 0; c < 3; ++c) {
+      const double rho_average = reflectance_area[c] / area;
+      scan.ambient[c] = rho_average < 1.0 ? unshot_area[c] / area / (1.0 - rho_average) : 0.0;
     }
   }
-  return best;
+  return scan;
 }
+
+double Solver::unshot_fraction() const { return scan_patches().unshot_fraction; }
+
+Rgb Solver::ambient() const { return scan_patches().ambient; }
 
 void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset) {
   const auto start = Clock::now();
@@ -250,17 +262,19 @@ void Solver::receive(mesh::NodeId leaf, const Rgb& incident, double sign) {
           incident, sign);
 }
 
-bool Solver::shoot_once() {
+bool Solver::shoot_once() { return shoot(scan_patches()); }
+
+bool Solver::shoot(const PatchScan& scan) {
   auto start = Clock::now();
   cache_.update(hierarchy_);
   times_.subdivision += seconds_since(start);
 
-  const mesh::NodeId shooter = pick_shooter();
+  const mesh::NodeId shooter = scan.shooter;
   if (shooter == mesh::kNoNode) return false;
   const double relaxation = options_.relaxation;
   // With overshooting, also what the shooter is expected to receive later: its reflectance times the ambient
   // term of the unshot flux.
-  const Rgb overshoot = options_.overshoot ? material(shooter).reflectance * ambient() : Rgb{};
+  const Rgb overshoot = options_.overshoot ? material(shooter).reflectance * scan.ambient : Rgb{};
   const double area = hierarchy_.area(shooter);
   const Rgb shot_flux = hierarchy_.unshot(shooter) * (relaxation * area) + overshoot * area;
 
@@ -276,6 +290,12 @@ bool Solver::shoot_once() {
   touched_.clear();
   const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces
   update_deposits();
+  // The luminance table of substructuring follows the deposits when it is current and no channel of the shot is
+  // negative: then only the receivers of this shot change, and only upwards, so the largest reflected luminance
+  // is the larger of the old one and theirs (steep_leaves_of_shot).
+  const bool follow = options_.adaptive && luminance_current() && shot_flux.r >= 0.0 && shot_flux.g >= 0.0 &&
+                      shot_flux.b >= 0.0;
+  if (!follow) luminance_revision_ = kNoRevision;
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     // A planar surface sends nothing to itself (its own elements included).
     if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
@@ -285,6 +305,11 @@ bool Solver::shoot_once() {
     factor_written_.push_back(d.leaf);
     deposit(d, incident, 1.0);
     touched_.push_back(static_cast<std::uint32_t>(i));
+    if (follow) {
+      const Rgb& b = hierarchy_.radiosity(d.leaf);
+      luminance_[i] = b.luminance();
+      largest_reflected_ = std::max(largest_reflected_, (b - emission_[i]).luminance());
+    }
   }
   ++shots_;
 
@@ -333,20 +358,24 @@ bool too_steep(double luminance, double neighbour_luminance, double threshold) {
 std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   neighbours_.update(hierarchy_, cache_);
   update_deposits();
-  luminance_.resize(cache_.size());
-  const double largest = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& range, double partial) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const Rgb& b = hierarchy_.radiosity(cache_.leaf(i));
-          luminance_[i] = b.luminance();
-          partial = std::max(partial, (b - emission_[i]).luminance());
-        }
-        return partial;
-      },
-      [](double a, double b) { return std::max(a, b); });
+  if (!luminance_current()) {  // else the shot's deposits kept it current
+    luminance_.resize(cache_.size());
+    largest_reflected_ = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& range, double partial) {
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const Rgb& b = hierarchy_.radiosity(cache_.leaf(i));
+            luminance_[i] = b.luminance();
+            partial = std::max(partial, (b - emission_[i]).luminance());
+          }
+          return partial;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    luminance_revision_ = cache_.revision();
+    luminance_source_ = &hierarchy_.impl();
+  }
   std::vector<mesh::NodeId> candidates;
-  const double threshold = options_.gradient * largest;
+  const double threshold = options_.gradient * largest_reflected_;
   if (!(threshold > 0.0)) return candidates;
   candidate_flag_.assign(cache_.size(), 0);
   const auto flag = [this](std::uint32_t r) {
@@ -502,20 +531,22 @@ void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
   const double total_before = times_.total;
   converged_ = false;
   interrupted_ = false;
+  PatchScan scan = scan_patches();
   while (true) {
-    if (unshot_fraction() < options_.converge) {
+    if (scan.unshot_fraction < options_.converge) {
       converged_ = true;
       break;
     }
     if (shots_ >= options_.max_shots) break;
-    if (!shoot_once()) {
+    if (!shoot(scan)) {
       converged_ = true;  // nothing left to shoot
       break;
     }
+    scan = scan_patches();
     if (keep_going) {
-      const Progress progress{shots_, unshot_fraction(), hierarchy_.leaf_count(), total_before + seconds_since(start)};
+      const Progress progress{shots_, scan.unshot_fraction, hierarchy_.leaf_count(), total_before + seconds_since(start)};
       if (!keep_going(progress)) {
-        converged_ = unshot_fraction() < options_.converge;
+        converged_ = scan.unshot_fraction < options_.converge;
         interrupted_ = !converged_;
         break;
       }
@@ -533,26 +564,6 @@ std::vector<Rgb> Solver::radiosity() const {
 }
 
 void Solver::pull_up() { hierarchy_.update_inner_radiosity(); }
-
-Rgb Solver::ambient() const {
-  // Cohen et al. 1988, section 3.2: R = 1 / (1 - rho_avg), ambient = R sum dB_i A_i / sum A_i.
-  Rgb reflectance_area{};
-  Rgb unshot_area{};
-  double area = 0.0;
-  for (mesh::NodeId patch : hierarchy_.patches()) {
-    const double a = hierarchy_.area(patch);
-    reflectance_area += material(patch).reflectance * a;
-    unshot_area += hierarchy_.unshot(patch) * a;
-    area += a;
-  }
-  if (!(area > 0.0)) return Rgb{};
-  Rgb result{};
-  for (int c = 0; c < 3; ++c) {
-    const double rho_average = reflectance_area[c] / area;
-    result[c] = rho_average < 1.0 ? unshot_area[c] / area / (1.0 - rho_average) : 0.0;
-  }
-  return result;
-}
 
 std::vector<Rgb> Solver::displayed_radiosity() const {
   std::vector<Rgb> values = radiosity();

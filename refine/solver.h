@@ -129,7 +129,17 @@ class Solver {
 
  private:
   void initialise();
-  mesh::NodeId pick_shooter() const;
+  // What the loop asks of the patches between two shots, in one pass over them (in patches() order): the unshot
+  // fraction, the shooter (the largest unshot flux sum |dB| A over channels; ties to the lowest id; kNoNode when
+  // none is left) and the ambient term.
+  struct PatchScan {
+    double unshot_fraction = 0.0;
+    mesh::NodeId shooter = mesh::kNoNode;
+    Rgb ambient{};
+  };
+  PatchScan scan_patches() const;
+  // shoot_once() with the scan of the current state.
+  bool shoot(const PatchScan& scan);
   // Fills ff_ for the receivers in `subset` (all when empty), averaging over the shooter's sample points.
   void compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset);
   const Material& material(mesh::NodeId node) const;
@@ -151,14 +161,19 @@ class Solver {
   // leaf with a corrected piece so that together they get the factor it had received.
   void share_out_corrected_factors(mesh::NodeId first_new);
   double largest_reflected_luminance() const;
-  // |dB| per channel: with the patch's area, what chooses the shooter and what the unshot fraction sums.
-  Rgb unshot_magnitude(mesh::NodeId patch) const;
   // Rebuilds deposits_ and emission_ when the receiver view changed.
   void update_deposits();
 
   const Scene& scene_;
   SolverOptions options_;
   mesh::Hierarchy hierarchy_;
+  // Per patch, in patches() order: what scan_patches() reads besides dB (none of it changes).
+  struct PatchEntry {
+    mesh::NodeId node;
+    double area;
+    Rgb reflectance;
+  };
+  std::vector<PatchEntry> patch_table_;
   std::unique_ptr<formfactor::FormFactorBackend> backend_;
   ReceiverCache cache_;
   double scene_diagonal_ = 0.0;
@@ -189,8 +204,16 @@ class Solver {
   std::vector<Rgb> emission_;
   std::uint64_t deposits_revision_ = ~std::uint64_t{0};
   const mesh::Hierarchy::Impl* deposits_source_ = nullptr;
-  // Per receiver, scratch of one substructuring step: radiosity luminance, and 1 when it is to be split.
+  // Per receiver, for substructuring: radiosity luminance, and 1 when it is to be split. The luminances and the
+  // largest reflected luminance max (B - E) over all receivers are current for revision luminance_revision_.
+  static constexpr std::uint64_t kNoRevision = ~std::uint64_t{0};
   std::vector<double> luminance_;
+  double largest_reflected_ = 0.0;
+  std::uint64_t luminance_revision_ = kNoRevision;
+  const mesh::Hierarchy::Impl* luminance_source_ = nullptr;
+  bool luminance_current() const {
+    return luminance_revision_ == cache_.revision() && luminance_source_ == &hierarchy_.impl();
+  }
   std::vector<std::uint8_t> candidate_flag_;
 
   Rgb emitted_flux_{};
