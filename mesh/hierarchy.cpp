@@ -232,6 +232,8 @@ Rgb& Hierarchy::radiosity(NodeId node) { return impl_->radiosity[node]; }
 const Rgb& Hierarchy::radiosity(NodeId node) const { return impl_->radiosity[node]; }
 Rgb& Hierarchy::unshot(NodeId node) { return impl_->unshot[node]; }
 const Rgb& Hierarchy::unshot(NodeId node) const { return impl_->unshot[node]; }
+std::span<Rgb> Hierarchy::radiosities() { return impl_->radiosity; }
+std::span<Rgb> Hierarchy::unshots() { return impl_->unshot; }
 
 void Hierarchy::add_radiosity(NodeId leaf, const Rgb& delta) {
   Impl& m = *impl_;

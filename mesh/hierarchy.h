@@ -77,6 +77,10 @@ class Hierarchy {
   const Rgb& radiosity(NodeId node) const;
   Rgb& unshot(NodeId node);
   const Rgb& unshot(NodeId node) const;
+  // The same for every node, indexed by NodeId, for loops over many nodes (the accessors above are out of line).
+  // Valid until the next split adds nodes.
+  std::span<Rgb> radiosities();
+  std::span<Rgb> unshots();
   // Adds `delta` to the radiosity of `leaf` and delta x area(leaf) / area(a) to every ancestor a, so each
   // inner node keeps the area-weighted mean of its leaves (an invariant check_invariants verifies). O(level).
   void add_radiosity(NodeId leaf, const Rgb& delta);

@@ -249,17 +249,20 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   times_.form_factors += seconds_since(start);
 }
 
-void Solver::deposit(const Deposit& d, const Rgb& incident, double sign) {
+const Rgb& Solver::deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
+                           std::span<Rgb> unshot) {
   const Rgb reflected = d.reflectance * incident;  // flux
-  hierarchy_.radiosity(d.leaf) += reflected * d.inverse_area;
-  hierarchy_.unshot(d.patch) += reflected * d.inverse_patch_area;
+  Rgb& b = radiosity[d.leaf];
+  b += reflected * d.inverse_area;
+  unshot[d.patch] += reflected * d.inverse_patch_area;
   absorbed_flux_ += (Rgb(1.0) - d.reflectance) * incident * sign;
+  return b;
 }
 
 void Solver::receive(mesh::NodeId leaf, const Rgb& incident, double sign) {
   const mesh::NodeId patch = hierarchy_.patch(leaf);
   deposit({material(leaf).reflectance, sign / hierarchy_.area(leaf), sign / hierarchy_.area(patch), leaf, patch},
-          incident, sign);
+          incident, sign, hierarchy_.radiosities(), hierarchy_.unshots());
 }
 
 bool Solver::shoot_once() { return shoot(scan_patches()); }
@@ -296,6 +299,7 @@ bool Solver::shoot(const PatchScan& scan) {
   const bool follow = options_.adaptive && luminance_current() && shot_flux.r >= 0.0 && shot_flux.g >= 0.0 &&
                       shot_flux.b >= 0.0;
   if (!follow) luminance_revision_ = kNoRevision;
+  const std::span<Rgb> radiosity = hierarchy_.radiosities(), unshot = hierarchy_.unshots();
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     // A planar surface sends nothing to itself (its own elements included).
     if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
@@ -303,10 +307,9 @@ bool Solver::shoot(const PatchScan& scan) {
     const Rgb incident = shot_flux * ff_[i];
     received_factor_[d.leaf] = ff_[i];
     factor_written_.push_back(d.leaf);
-    deposit(d, incident, 1.0);
+    const Rgb& b = deposit(d, incident, 1.0, radiosity, unshot);
     touched_.push_back(static_cast<std::uint32_t>(i));
     if (follow) {
-      const Rgb& b = hierarchy_.radiosity(d.leaf);
       luminance_[i] = b.luminance();
       largest_reflected_ = std::max(largest_reflected_, (b - emission_[i]).luminance());
     }
