@@ -320,14 +320,6 @@ bool Solver::shoot(const PatchScan& scan) {
   return true;
 }
 
-double Solver::largest_reflected_luminance() const {
-  double largest = 0.0;
-  for (mesh::NodeId leaf : cache_.leaves()) {
-    largest = std::max(largest, (hierarchy_.radiosity(leaf) - material(leaf).emission).luminance());
-  }
-  return largest;
-}
-
 void Solver::update_deposits() {
   if (deposits_revision_ == cache_.revision() && deposits_source_ == &hierarchy_.impl()) return;
   deposits_.resize(cache_.size());
@@ -358,25 +350,30 @@ bool too_steep(double luminance, double neighbour_luminance, double threshold) {
 // heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
 // neighbours), in parallel, with the same result whatever the thread count: a maximum, and a set of flags (a flag
 // may be set by two threads at once, to the same value). Candidates come out by node id.
+void Solver::update_luminance() {
+  update_deposits();
+  if (luminance_current()) return;
+  luminance_.resize(cache_.size());
+  const std::span<const Rgb> radiosity = hierarchy_.radiosities();
+  const std::span<const mesh::NodeId> leaves = cache_.leaves();
+  largest_reflected_ = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& range, double partial) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Rgb& b = radiosity[leaves[i]];
+          luminance_[i] = b.luminance();
+          partial = std::max(partial, (b - emission_[i]).luminance());
+        }
+        return partial;
+      },
+      [](double a, double b) { return std::max(a, b); });
+  luminance_revision_ = cache_.revision();
+  luminance_source_ = &hierarchy_.impl();
+}
+
 std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   neighbours_.update(hierarchy_, cache_);
-  update_deposits();
-  if (!luminance_current()) {  // else the shot's deposits kept it current
-    luminance_.resize(cache_.size());
-    largest_reflected_ = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
-        [&](const tbb::blocked_range<std::size_t>& range, double partial) {
-          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            const Rgb& b = hierarchy_.radiosity(cache_.leaf(i));
-            luminance_[i] = b.luminance();
-            partial = std::max(partial, (b - emission_[i]).luminance());
-          }
-          return partial;
-        },
-        [](double a, double b) { return std::max(a, b); });
-    luminance_revision_ = cache_.revision();
-    luminance_source_ = &hierarchy_.impl();
-  }
+  update_luminance();  // a no-op when the shot's deposits kept the table current
   std::vector<mesh::NodeId> candidates;
   const double threshold = options_.gradient * largest_reflected_;
   if (!(threshold > 0.0)) return candidates;
@@ -403,9 +400,10 @@ std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
 
 // Leaves made by splits are not in the flat tables yet: they and their neighbours are asked of the hierarchy.
 // Sorted by node id, without repeats.
-std::vector<mesh::NodeId> Solver::steep_leaves_among(std::span<const mesh::NodeId> new_leaves) const {
+std::vector<mesh::NodeId> Solver::steep_leaves_among(std::span<const mesh::NodeId> new_leaves) {
+  update_luminance();  // the view is that of the new leaves (substructure updated the cache)
   std::vector<mesh::NodeId> candidates;
-  const double threshold = options_.gradient * largest_reflected_luminance();
+  const double threshold = options_.gradient * largest_reflected_;
   if (!(threshold > 0.0)) return candidates;
   std::vector<mesh::NodeId> around;
   for (mesh::NodeId leaf : new_leaves) {

@@ -155,14 +155,15 @@ class Solver {
   // Its steps: the leaves whose luminance steps too far from a neighbour's, among those this shot reached, then
   // among the leaves a round of splits made; the splits; the split leaves' share of the shot taken back.
   std::vector<mesh::NodeId> steep_leaves_of_shot();
-  std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves) const;
+  std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves);
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
   std::vector<mesh::NodeId> take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
                                                    const Rgb& shot_flux);
   // After the near-field correction changed some of the new leaves' factors: scales the new leaves of every split
   // leaf with a corrected piece so that together they get the factor it had received.
   void share_out_corrected_factors(mesh::NodeId first_new);
-  double largest_reflected_luminance() const;
+  // Makes luminance_ and largest_reflected_ current for the receiver view (and deposits_ with them).
+  void update_luminance();
   // Rebuilds deposits_ and emission_ when the receiver view changed.
   void update_deposits();
 
