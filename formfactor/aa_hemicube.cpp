@@ -30,8 +30,8 @@ std::size_t AaHemicubeBackend::last_entries() const {
 }
 
 void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
-                                   std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
-                                   UnoccludedList& unoccluded) {
+                                   std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b,
+                                   std::span<double> sums, UnoccludedList& unoccluded) {
   const FaceTask& t = tasks_[static_cast<std::size_t>(task)];
   const HemicubeFace face = t.face;
   // The task's viewport: columns [t.x0, t.x1) of the face, shifted to start at 0.
@@ -69,7 +69,8 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     b.mask.reset(width, height);
     const std::uint8_t need = task_mask(t, geometry_.resolution());
     for (const std::uint32_t i : subset) {
-      if ((prepared_.face_mask(i) & need) == need && place(i) != 0) b.mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
+      if ((prepared_.face_mask(i) & need) == need && place(i) != 0)
+        b.mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
     }
     if (b.mask.empty()) {
       task_entries_[static_cast<std::size_t>(task)] = 0;

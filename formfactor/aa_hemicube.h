@@ -62,7 +62,8 @@ class AaHemicubeBackend final : public FormFactorBackend {
   };
   // One task of a shot: every candidate, or with a non-empty subset only those that share pixels with it.
   void shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
-                  std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& buffers, std::span<double> sums, UnoccludedList& unoccluded);
+                  std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& buffers,
+                  std::span<double> sums, UnoccludedList& unoccluded);
 
   HemicubeGeometry geometry_;
   // Delta form factors of every face in the arena's column-major order (pixel (x, y) at x * height + y).

@@ -14,8 +14,8 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
 void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
-                                 std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
-                                 UnoccludedList& unoccluded) const {
+                                 std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b,
+                                 std::span<double> sums, UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
   const int face_width = geometry_.width(face), width = task.x1 - task.x0, height = geometry_.height(face);
@@ -57,7 +57,8 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint
 
   for (const std::uint32_t i : candidates) {
     const std::size_t m = place(i);
-    if (m == 0 || (masked && !b.mask.overlaps(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max))) continue;
+    if (m == 0 || (masked && !b.mask.overlaps(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max)))
+      continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const std::uint32_t item = i;
     const auto sample = [&](int x, int y) {
@@ -98,8 +99,8 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
   sums_.start(tasks, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int t) {
-    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), subset, max_vertices, buffers_.local(), sums_.sums(t),
-               task_unoccluded_[static_cast<std::size_t>(t)]);
+    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), subset, max_vertices, buffers_.local(),
+               sums_.sums(t), task_unoccluded_[static_cast<std::size_t>(t)]);
   });
   sums_.combine(subset, out);
 }

@@ -100,9 +100,9 @@ class HemicubeBackend final : public FormFactorBackend {
     TileMask mask;  // a re-shot subset's pixels in the task
   };
   // One task of a shot: every candidate, or with a non-empty subset only those that share pixels with it.
-  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates, std::span<const std::uint32_t> subset,
-                  std::size_t max_vertices, FaceBuffers& buffers, std::span<double> sums,
-                  UnoccludedList& unoccluded) const;
+  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
+                  std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& buffers,
+                  std::span<double> sums, UnoccludedList& unoccluded) const;
 
   HemicubeGeometry geometry_;
   PreparedReceivers prepared_;

@@ -345,11 +345,6 @@ bool too_steep(double luminance, double neighbour_luminance, double threshold) {
 
 }  // namespace
 
-// Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the threshold
-// grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this is a
-// heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
-// neighbours), in parallel, with the same result whatever the thread count: a maximum, and a set of flags (a flag
-// may be set by two threads at once, to the same value). Candidates come out by node id.
 void Solver::update_luminance() {
   update_deposits();
   if (luminance_current()) return;
@@ -371,6 +366,11 @@ void Solver::update_luminance() {
   luminance_source_ = &hierarchy_.impl();
 }
 
+// Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the threshold
+// grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this is a
+// heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
+// neighbours), in parallel, with the same result whatever the thread count: a maximum, and a set of flags (a flag
+// may be set by two threads at once, to the same value). Candidates come out by node id.
 std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   neighbours_.update(hierarchy_, cache_);
   update_luminance();  // a no-op when the shot's deposits kept the table current
@@ -545,7 +545,8 @@ void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
     }
     scan = scan_patches();
     if (keep_going) {
-      const Progress progress{shots_, scan.unshot_fraction, hierarchy_.leaf_count(), total_before + seconds_since(start)};
+      const Progress progress{shots_, scan.unshot_fraction, hierarchy_.leaf_count(),
+                              total_before + seconds_since(start)};
       if (!keep_going(progress)) {
         converged_ = scan.unshot_fraction < options_.converge;
         interrupted_ = !converged_;
