@@ -424,10 +424,15 @@ std::vector<mesh::NodeId> Solver::steep_leaves_among(std::span<const mesh::NodeI
 // Splits the candidates that may be split; returns every node split, balancing's included.
 std::vector<mesh::NodeId> Solver::split_candidates(std::span<const mesh::NodeId> candidates) {
   std::vector<mesh::NodeId> split_nodes;
+  refused_.resize(hierarchy_.node_count(), 0);
   for (mesh::NodeId candidate : candidates) {
     // Already split by balancing, or at the deepest level or smallest area (asked first: a refused split
     // composes its reason, and such leaves come back as candidates shot after shot).
-    if (!hierarchy_.can_split(candidate)) continue;
+    if (refused_[candidate] != 0) continue;
+    if (!hierarchy_.can_split(candidate)) {
+      refused_[candidate] = 1;
+      continue;
+    }
     const mesh::SplitResult result = hierarchy_.split(candidate);
     if (!result.ok) continue;
     split_nodes.push_back(candidate);

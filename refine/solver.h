@@ -190,6 +190,10 @@ class Solver {
   // is the shot's flux times this factor.
   std::vector<double> received_factor_;
   std::vector<mesh::NodeId> factor_written_;  // the nodes whose received_factor_ the current shot set
+  // Per NodeId: 1 when the hierarchy refused to split the node (deepest level, smallest area, or already split).
+  // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
+  // shot after shot: the refusal is asked once instead of recomputing the children's areas every time.
+  std::vector<std::uint8_t> refused_;
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
   // Per receiver: edge-neighbours (receiver indices).
