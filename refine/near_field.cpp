@@ -42,11 +42,18 @@ void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span
   patch_centroid_.assign(centroids.begin(), centroids.end());
   patch_radius_.assign(radii.begin(), radii.end());
   near_patch_.assign(patch_centroid_.size(), 0);
+  near_patches_.clear();
+  marked_radius_ = -1.0;
+  listed_view_ = nullptr;
 }
 
 double NearFieldCorrection::mark_near_patches(const NearFieldShooter& shooter) {
   double radius = 0.0;
   for (const Vec3& corner : shooter.polygon) radius = std::max(radius, glm::length(corner - shooter.centroid));
+  if (radius == marked_radius_ && shooter.centroid == marked_centroid_) return radius;  // marked already
+  marked_centroid_ = shooter.centroid;
+  marked_radius_ = radius;
+  listed_view_ = nullptr;
   // Every point of a patch lies within its radius of its centroid.
   const double near_distance = reach_ * radius;
   for (std::uint32_t p : near_patches_) near_patch_[p] = 0;
@@ -68,7 +75,15 @@ std::span<const std::uint8_t> NearFieldCorrection::candidates(const NearFieldSho
   candidate_.assign(receivers.size(), 0);
   if (!(reach_ > 0.0)) return candidate_;
   mark_near_patches(shooter);
-  for (std::size_t i = 0; i < receivers.size(); ++i) candidate_[i] = near_patch(receivers.patch(i)) ? 1 : 0;
+  listed_.clear();
+  for (std::uint32_t i = 0; i < receivers.size(); ++i) {
+    if (near_patch(receivers.patch(i))) {
+      candidate_[i] = 1;
+      listed_.push_back(i);
+    }
+  }
+  listed_view_ = &receivers;
+  listed_size_ = receivers.size();
   return candidate_;
 }
 
@@ -86,10 +101,14 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
 
-  const std::size_t count = whole_shot ? receivers.size() : subset.size();
+  // The receivers to look at, in order: the subset, or the receivers of near patches that candidates() listed for
+  // this shooter and view, or every receiver.
+  const bool listed = whole_shot && listed_view_ == &receivers && listed_size_ == receivers.size();
+  const std::span<const std::uint32_t> among = listed ? std::span<const std::uint32_t>(listed_) : subset;
+  const std::size_t count = whole_shot && !listed ? receivers.size() : among.size();
   double back_end_total = 0.0, shaped_total = 0.0;
   for (std::size_t k = 0; k < count; ++k) {
-    const std::uint32_t i = whole_shot ? static_cast<std::uint32_t>(k) : subset[k];
+    const std::uint32_t i = whole_shot && !listed ? static_cast<std::uint32_t>(k) : among[k];
     if (!(ff[i] > 0.0)) continue;  // hidden, culled or behind: nothing to shape
     if (!near_patch(receivers.patch(i))) continue;
     const std::span<const Vec3> polygon = receivers.polygon(i);

@@ -102,7 +102,17 @@ class NearFieldCorrection {
   }
 
   std::vector<std::uint8_t> near_patch_;  // per patch id: 1 when it may hold near receivers (this shot)
+  // The shooter near_patch_ was marked for (its centroid and radius; radius -1 when none): a shot marks the patches
+  // once for candidates() and every apply() of its whole shot and its subsets.
+  Vec3 marked_centroid_{0.0};
+  double marked_radius_ = -1.0;
   std::vector<std::uint8_t> candidate_;   // per receiver: candidates()
+  // The receivers candidates() flagged, in order, for the view at listed_view_ of listed_size_ receivers and the
+  // shooter marked then (listed_view_ is null when a later marking made them stale): apply() to a whole shot of
+  // that view looks at these instead of at every receiver.
+  std::vector<std::uint32_t> listed_;
+  const formfactor::ReceiverView* listed_view_ = nullptr;
+  std::size_t listed_size_ = 0;
   std::vector<std::uint32_t> near_patches_;
   std::vector<std::uint32_t> near_;
   std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)

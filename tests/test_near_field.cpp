@@ -1,6 +1,7 @@
 // The near-field correction (refine/near_field.h): a unit floor patch shooting into the wall it meets, cut into
 // small elements, against the patch-to-element factors F(A_s -> e) integrated from the elements' side; the shot's
 // total kept; receivers far away or as large as the patch only scaled; occlusion kept.
+#include "core/polygon.h"
 #include "core/quadrature.h"
 #include "formfactor/analytic.h"
 #include "formfactor/backend.h"
@@ -9,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -198,6 +200,49 @@ TEST(NearField, AaHemicubeSeesAJunctionWhole) {
   shooter.unoccluded = unoccluded;
   correction.apply(shooter, scene.view, {}, aa_ff);
   for (std::uint32_t r : scene.wall) EXPECT_NEAR(aa_ff[r], exact_ff[r], 1e-12 * exact_ff[r]) << r;
+}
+
+TEST(NearField, CandidatesListGivesWhatEveryReceiverGives) {
+  // After candidates(), apply() to the whole shot looks only at the receivers of near patches that it listed; a
+  // correction that was never asked for candidates looks at every receiver. Both give the same factors, bit for
+  // bit, also when candidates() was last asked for another shooter (its list is then stale and not used).
+  Junction scene;
+  // Every receiver is a patch of its own here: the table of patches, so that near patches are told from far ones.
+  std::vector<Vec3> centroids;
+  std::vector<double> radii;
+  for (std::uint32_t i = 0; i < scene.view.size(); ++i) {
+    const std::uint32_t patch = scene.view.patch(i);
+    centroids.resize(std::max<std::size_t>(centroids.size(), patch + 1), Vec3(0.0));
+    radii.resize(centroids.size(), -1.0);
+    const std::span<const Vec3> polygon = scene.view.polygon(i);
+    centroids[patch] = centroid(polygon);
+    radii[patch] = 0.0;
+    for (const Vec3& corner : polygon) radii[patch] = std::max(radii[patch], glm::length(corner - centroids[patch]));
+  }
+  auto aa = formfactor::make_backend("aa-hemicube", {100});
+  const std::vector<double> shot = scene.shoot(*aa);
+  NearFieldShooter shooter = scene.shooter();
+  // The same patch moved 3.5 along y: from there only the far end of the wall is near.
+  std::vector<Vec3> moved(shooter.polygon.begin(), shooter.polygon.end());
+  for (Vec3& corner : moved) corner.y += 3.5;
+  NearFieldShooter away = shooter;
+  away.polygon = moved;
+  away.centroid.y += 3.5;
+
+  for (const NearFieldShooter* asked : {&shooter, &away}) {
+    NearFieldCorrection listing(4.0), scanning(4.0);
+    listing.set_patches(centroids, radii);
+    scanning.set_patches(centroids, radii);
+    const std::span<const std::uint8_t> flags = listing.candidates(*asked, scene.view);
+    const auto flagged = std::count(flags.begin(), flags.end(), std::uint8_t{1});
+    EXPECT_GT(flagged, 0);
+    if (asked == &away) EXPECT_LT(flagged, static_cast<long>(scene.wall.size()));  // fewer than the whole wall
+    std::vector<double> listed = shot, scanned = shot;
+    listing.apply(shooter, scene.view, {}, listed);
+    scanning.apply(shooter, scene.view, {}, scanned);
+    EXPECT_EQ(listed, scanned);
+    EXPECT_NE(listed, shot);  // the correction changed something
+  }
 }
 
 TEST(NearField, HiddenPartsStayHidden) {
