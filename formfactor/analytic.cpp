@@ -67,14 +67,13 @@ std::size_t clip_to_front(std::span<const Vec3> local_polygon, std::span<Vec3> o
 
 void AnalyticBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                               std::span<const std::uint32_t> subset, std::span<double> out) {
-  cull_back_faces(shooter.centre, receivers, patch_state_, front_);
-  const std::vector<std::uint8_t>& front = front_;
+  culling_.decide(shooter.centre, receivers);
   const std::size_t count = subset.empty() ? receivers.size() : subset.size();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const tbb::blocked_range<std::size_t>& range) {
     Scratch& s = scratch_.local();
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
       const std::size_t i = subset.empty() ? k : subset[k];
-      if (front[i] == 0) {
+      if (!culling_.faces(i)) {
         out[i] = 0.0;
         continue;
       }

@@ -5,6 +5,7 @@
 
 #include "core/math.h"
 #include "formfactor/backend.h"
+#include "formfactor/hemicube_geometry.h"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -39,7 +40,7 @@ class AnalyticBackend final : public FormFactorBackend {
   struct Scratch {
     std::vector<Vec3> local, clipped;
   };
-  std::vector<std::uint8_t> patch_state_, front_;
+  BackFaceCulling culling_;
   tbb::enumerable_thread_specific<Scratch> scratch_;
 };
 

@@ -254,7 +254,7 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
   outside_.resize(count);
   face_mask_.resize(count);
 
-  cull_back_faces(shooter.centre, receivers, patch_state_, front_);
+  culling_.decide(shooter.centre, receivers);
 
   // Every point once (a vertex is a corner of up to four elements), then every receiver combines its corners'
   // outcodes.
@@ -268,7 +268,7 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
                     });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      if (front_[i] == 0 || offsets_[i + 1] - offsets_[i] < 3) {
+      if (!culling_.faces(i) || offsets_[i + 1] - offsets_[i] < 3) {
         face_mask_[i] = 0;  // culled: no face looks at its local coordinates
         continue;
       }
@@ -342,23 +342,46 @@ bool TileMask::overlaps(double x_min, double x_max, double y_min, double y_max) 
   return false;
 }
 
-void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,
-                     std::vector<std::uint8_t>& front) {
+void BackFaceCulling::find_deciders(const ReceiverView& receivers) {
   const std::size_t count = receivers.size();
-  front.resize(count);
+  const std::span<const std::uint32_t> patches = receivers.patches();
   std::uint32_t max_patch = 0;
-  for (std::uint32_t p : receivers.patches()) max_patch = std::max(max_patch, p);
-  const bool per_patch = count > 0 && max_patch <= 16 * count + 1024;
-  patch_state.assign(per_patch ? static_cast<std::size_t>(max_patch) + 1 : 0, 0);  // 0 unknown, 1 front, 2 back
-  // Serially in receiver order: the first receiver of a patch decides, whatever the thread count.
-  for (std::size_t i = 0; i < count; ++i) {
-    if (per_patch) {
-      std::uint8_t& state = patch_state[receivers.patch(i)];
-      if (state == 0) state = faces_point(receivers.plane(i), centre) ? 1 : 2;
-      front[i] = state == 1 ? 1 : 0;
-    } else {
-      front[i] = faces_point(receivers.plane(i), centre) ? 1 : 0;
+  for (const std::uint32_t p : patches) max_patch = std::max(max_patch, p);
+  per_patch_ = count > 0 && max_patch <= 16 * count + 1024;
+  decider_patch_.clear();
+  decider_receiver_.clear();
+  patch_faces_.assign(per_patch_ ? static_cast<std::size_t>(max_patch) + 1 : 0, 0);
+  // In receiver order: a patch's first receiver decides, whatever the thread count. patch_faces_ marks the patches
+  // seen while they are listed (decide() overwrites every listed entry).
+  if (per_patch_) {
+    for (std::uint32_t i = 0; i < count; ++i) {
+      std::uint8_t& seen = patch_faces_[patches[i]];
+      if (seen != 0) continue;
+      seen = 1;
+      decider_patch_.push_back(patches[i]);
+      decider_receiver_.push_back(i);
     }
+  }
+  revision_ = receivers.revision();
+  size_ = count;
+}
+
+void BackFaceCulling::decide(const Vec3& centre, const ReceiverView& receivers) {
+  if (receivers.revision() != revision_ || receivers.size() != size_) find_deciders(receivers);
+  patches_ = receivers.patches();
+  if (per_patch_) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, decider_patch_.size(), 512),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t k = range.begin(); k != range.end(); ++k)
+                          patch_faces_[decider_patch_[k]] = faces_point(receivers.plane(decider_receiver_[k]), centre);
+                      });
+  } else {
+    receiver_faces_.resize(receivers.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, receivers.size(), 512),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t i = range.begin(); i != range.end(); ++i)
+                          receiver_faces_[i] = faces_point(receivers.plane(i), centre);
+                      });
   }
 }
 

@@ -131,12 +131,28 @@ inline Plane plane_to_local(const Shooter& shooter, const Plane& plane) {
 // Back-face culling (paper, section 3.2): whether the front side of `plane` strictly contains `centre`,
 // decided exactly (sign_of_linear).
 bool faces_point(const Plane& plane, const Vec3& centre);
-// Back-face culling per parent patch: front[i] = 1 when the patch of receiver i faces `centre`, else 0. A patch
-// is decided once, on the plane of its first receiver (receivers are coplanar with their patch), so all its
-// pieces are culled together; sparse patch ids (larger than 16 x receivers + 1024) fall back to each
-// receiver's own plane. `patch_state` is scratch kept between calls.
-void cull_back_faces(const Vec3& centre, const ReceiverView& receivers, std::vector<std::uint8_t>& patch_state,
-                     std::vector<std::uint8_t>& front);
+// Back-face culling per parent patch: receiver i faces a point when its patch does. A patch is decided once
+// (faces_point), on the plane of its first receiver (receivers are coplanar with their patch), so all its pieces are
+// culled together; sparse patch ids (larger than 16 x receivers + 1024) fall back to each receiver's own plane.
+// Which receiver decides for each patch is kept between calls and found again only when the view changed
+// (ReceiverView::revision and size), so a shot decides its patches in parallel, with no pass over the receivers.
+class BackFaceCulling {
+ public:
+  // Decides every patch (or receiver) for a shot from `centre`; parallel, the same for any thread count.
+  void decide(const Vec3& centre, const ReceiverView& receivers);
+  // Whether receiver i of the view of the last decide() faces its centre.
+  bool faces(std::size_t i) const { return per_patch_ ? patch_faces_[patches_[i]] != 0 : receiver_faces_[i] != 0; }
+
+ private:
+  void find_deciders(const ReceiverView& receivers);
+  std::uint64_t revision_ = 0;  // of the view the deciders were found for (revisions start at 1)
+  std::size_t size_ = 0;
+  bool per_patch_ = false;
+  std::span<const std::uint32_t> patches_;
+  std::vector<std::uint32_t> decider_patch_, decider_receiver_;  // per patch that has receivers: its first receiver
+  std::vector<std::uint8_t> patch_faces_;     // per patch id: 1 when it faces the centre
+  std::vector<std::uint8_t> receiver_faces_;  // per receiver, with sparse patch ids
+};
 
 inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
 inline constexpr std::uint32_t kOutcodeUNotPositive = 1u << 20;  // !(u > 0)
@@ -342,8 +358,7 @@ class PreparedReceivers {
   std::vector<std::uint32_t> point_code_;   // per point: frustum_outcode
   std::vector<std::uint32_t> outside_;
   std::vector<std::uint8_t> face_mask_;
-  std::vector<std::uint8_t> patch_state_;
-  std::vector<std::uint8_t> front_;
+  BackFaceCulling culling_;
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'

@@ -3,11 +3,18 @@
 #include "core/error.h"
 
 #include <algorithm>
+#include <atomic>
 #include <string>
 
 namespace aarad::formfactor {
 
+std::uint64_t ReceiverView::next_revision() {
+  static std::atomic<std::uint64_t> last{0};
+  return ++last;
+}
+
 void ReceiverView::clear() {
+  revision_ = next_revision();
   vertices_.clear();
   offsets_.assign(1, 0);
   planes_.clear();
@@ -55,6 +62,7 @@ void ReceiverView::start_from_points_of(const ReceiverView& other) {
 
 void ReceiverView::append_from(const ReceiverView& other, std::uint32_t first, std::uint32_t last) {
   if (first >= last) return;
+  revision_ = next_revision();
   const std::uint32_t begin = other.offsets_[first], end = other.offsets_[last];
   const std::uint32_t base = offsets_.back();
   vertices_.insert(vertices_.end(), other.vertices_.begin() + begin, other.vertices_.begin() + end);
@@ -101,6 +109,7 @@ std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const s
 
 std::uint32_t ReceiverView::append(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
                                    std::uint32_t patch) {
+  revision_ = next_revision();
   vertices_.insert(vertices_.end(), polygon.begin(), polygon.end());
   max_polygon_size_ = std::max(max_polygon_size_, polygon.size());
   offsets_.push_back(static_cast<std::uint32_t>(vertices_.size()));

@@ -39,6 +39,10 @@ class ReceiverView {
   void append_from(const ReceiverView& other, std::uint32_t first, std::uint32_t last);
 
   std::size_t size() const { return planes_.size(); }
+  // Names the view's contents: it changes whenever receivers are added or cleared, and no two views that were ever
+  // filled differently share one (a copy keeps its original's). Back ends key what they derive from the view and
+  // keep between shots on it with size() (PreparedReceivers' culling).
+  std::uint64_t revision() const { return revision_; }
   // The most corners of any receiver (0 when empty).
   std::size_t max_polygon_size() const { return max_polygon_size_; }
   std::span<const Vec3> polygon(std::size_t i) const {
@@ -69,7 +73,10 @@ class ReceiverView {
   std::vector<std::uint32_t> corner_points_;  // per corner: index into points_
   std::vector<std::uint32_t> point_of_key_;  // per caller key: index into points_, or kNoPoint
   std::size_t max_polygon_size_ = 0;
+  std::uint64_t revision_ = next_revision();
   static constexpr std::uint32_t kNoPoint = 0xFFFFFFFFu;
+  // A revision no view has had yet (thread-safe).
+  static std::uint64_t next_revision();
 };
 
 }  // namespace aarad::formfactor

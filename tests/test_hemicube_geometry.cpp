@@ -161,11 +161,34 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
   testing::add(view, testing::rectangle({1, 0, 0}, {1, 0, 0}, {0, 1, 0}), 2, 2);  // coplanar with the point
   // A second piece of patch 0 with a plane that would not face the point: the patch decides.
   view.add(testing::rectangle({0, 0, 2}, {0, 1, 0}, {1, 0, 0}), Plane{{0, 0, 1}, -2.0}, 0, 0);
-  std::vector<std::uint8_t> state, front;
-  cull_back_faces(Vec3(0), view, state, front);
-  EXPECT_EQ(front, (std::vector<std::uint8_t>{1, 0, 0, 1}));
+  BackFaceCulling culling;
+  const auto faces = [&](const ReceiverView& v) {
+    culling.decide(Vec3(0), v);
+    std::vector<bool> result;
+    for (std::size_t i = 0; i < v.size(); ++i) result.push_back(culling.faces(i));
+    return result;
+  };
+  EXPECT_EQ(faces(view), (std::vector<bool>{true, false, false, true}));
   EXPECT_TRUE(faces_point(Plane{{0, 0, -1}, 1.0}, Vec3(0, 0, 1.0 - 1e-16)));
   EXPECT_FALSE(faces_point(Plane{{0, 0, -1}, 1.0}, Vec3(0, 0, 1.0)));
+
+  // The deciding receivers are kept between shots and found again when the view changes: a new receiver of a new
+  // patch; the same number of receivers with other patches; another view; sparse patch ids (per receiver).
+  testing::add(view, testing::rectangle({0, 0, 3}, {0, 1, 0}, {1, 0, 0}), 3, 7);  // faces down: seen
+  EXPECT_EQ(faces(view), (std::vector<bool>{true, false, false, true, true}));
+  ReceiverView other;
+  testing::add(other, testing::rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0}), 1, 0);  // faces up: culled
+  testing::add(other, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 1);  // faces down: seen
+  EXPECT_EQ(faces(other), (std::vector<bool>{false, true}));
+  other.clear();  // the same size again, each patch now first met at the other receiver
+  testing::add(other, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 1);
+  testing::add(other, testing::rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0}), 1, 0);
+  EXPECT_EQ(faces(other), (std::vector<bool>{true, false}));
+  ReceiverView sparse;
+  testing::add(sparse, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 1u << 30);
+  EXPECT_EQ(faces(sparse), (std::vector<bool>{true}));
+  sparse.add(testing::rectangle({0, 0, 2}, {0, 1, 0}, {1, 0, 0}), Plane{{0, 0, 1}, -2.0}, 0, 1u << 30);
+  EXPECT_EQ(faces(sparse), (std::vector<bool>{true, false}));  // each receiver's own plane
 }
 
 TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
