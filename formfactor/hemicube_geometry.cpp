@@ -131,19 +131,31 @@ std::array<std::size_t, kFaceTasks> TaskSums::loads() const {
 void TaskSums::combine(std::span<const std::uint32_t> subset, std::span<double> out) {
   if (subset.empty()) {
     // A task that does not list i has sums[i] == 0, and adding +0 changes no sum: the same numbers as adding
-    // every task's entry in order.
-    std::fill(out.begin(), out.end(), 0.0);
-    for (std::size_t k = 0; k < sums_.size(); ++k)
-      for (const std::uint32_t i : receivers_[k]) out[i] += sums_[k][i];
+    // every task's entry in order. Ranges of receivers are disjoint, and every list is in receiver order, so the
+    // ranges are added in parallel, each receiver's sum still in task order.
+    const tbb::blocked_range<std::size_t> all(0, out.size(), 4096);
+    tbb::parallel_for(all, [&](const tbb::blocked_range<std::size_t>& range) {
+      std::fill(out.begin() + static_cast<std::ptrdiff_t>(range.begin()),
+                out.begin() + static_cast<std::ptrdiff_t>(range.end()), 0.0);
+      for (std::size_t k = 0; k < sums_.size(); ++k) {
+        const std::vector<std::uint32_t>& list = receivers_[k];
+        const auto first = std::lower_bound(list.begin(), list.end(), range.begin());
+        const auto last = std::lower_bound(first, list.end(), range.end());
+        for (auto it = first; it != last; ++it) {
+          out[*it] += sums_[k][*it];
+          sums_[k][*it] = 0.0;
+        }
+      }
+    });
   } else {
     for (const std::uint32_t i : subset) {
       double sum = 0.0;
       for (const std::vector<double>& sums : sums_) sum += sums[i];
       out[i] = sum;
     }
+    for (std::size_t k = 0; k < sums_.size(); ++k)
+      for (const std::uint32_t i : receivers_[k]) sums_[k][i] = 0.0;
   }
-  for (std::size_t k = 0; k < sums_.size(); ++k)
-    for (const std::uint32_t i : receivers_[k]) sums_[k][i] = 0.0;
   clean_ = true;
 }
 
