@@ -45,6 +45,7 @@ void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span
   near_patches_.clear();
   marked_radius_ = -1.0;
   listed_view_ = nullptr;
+  indexed_revision_ = 0;
 }
 
 double NearFieldCorrection::mark_near_patches(const NearFieldShooter& shooter) {
@@ -70,18 +71,39 @@ double NearFieldCorrection::mark_near_patches(const NearFieldShooter& shooter) {
   return radius;
 }
 
+void NearFieldCorrection::index_patches(const formfactor::ReceiverView& receivers) {
+  if (receivers.revision() == indexed_revision_ && receivers.size() == indexed_size_) return;
+  // A counting sort of the receivers by patch id (ids past the table of patches are never near).
+  patch_start_.assign(patch_centroid_.size() + 1, 0);
+  for (std::uint32_t i = 0; i < receivers.size(); ++i)
+    if (receivers.patch(i) < patch_centroid_.size()) ++patch_start_[receivers.patch(i) + 1];
+  for (std::size_t p = 1; p < patch_start_.size(); ++p) patch_start_[p] += patch_start_[p - 1];
+  by_patch_.resize(patch_start_.back());
+  std::vector<std::uint32_t> next(patch_start_.begin(), patch_start_.end() - 1);
+  for (std::uint32_t i = 0; i < receivers.size(); ++i)
+    if (receivers.patch(i) < patch_centroid_.size()) by_patch_[next[receivers.patch(i)]++] = i;
+  indexed_revision_ = receivers.revision();
+  indexed_size_ = receivers.size();
+}
+
 std::span<const std::uint8_t> NearFieldCorrection::candidates(const NearFieldShooter& shooter,
                                                               const formfactor::ReceiverView& receivers) {
   candidate_.assign(receivers.size(), 0);
   if (!(reach_ > 0.0)) return candidate_;
   mark_near_patches(shooter);
   listed_.clear();
-  for (std::uint32_t i = 0; i < receivers.size(); ++i) {
-    if (near_patch(receivers.patch(i))) {
-      candidate_[i] = 1;
-      listed_.push_back(i);
+  if (patch_centroid_.empty()) {  // no table of patches: every receiver is a candidate
+    for (std::uint32_t i = 0; i < receivers.size(); ++i) listed_.push_back(i);
+  } else {
+    // The receivers of the near patches, from the view's receivers grouped by patch, in receiver order.
+    index_patches(receivers);
+    for (const std::uint32_t p : near_patches_) {
+      if (p + 1 >= patch_start_.size()) continue;  // no receiver has this patch
+      listed_.insert(listed_.end(), by_patch_.begin() + patch_start_[p], by_patch_.begin() + patch_start_[p + 1]);
     }
+    std::sort(listed_.begin(), listed_.end());
   }
+  for (const std::uint32_t i : listed_) candidate_[i] = 1;
   listed_view_ = &receivers;
   listed_size_ = receivers.size();
   return candidate_;

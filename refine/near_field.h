@@ -113,6 +113,13 @@ class NearFieldCorrection {
   std::vector<std::uint32_t> listed_;
   const formfactor::ReceiverView* listed_view_ = nullptr;
   std::size_t listed_size_ = 0;
+  // The view's receivers grouped by patch id (the receivers of patch p: by_patch_[patch_start_[p] ..
+  // patch_start_[p + 1]), in receiver order), for the view of revision indexed_revision_ and indexed_size_
+  // receivers; made again when the view changed.
+  void index_patches(const formfactor::ReceiverView& receivers);
+  std::vector<std::uint32_t> patch_start_, by_patch_;
+  std::uint64_t indexed_revision_ = 0;
+  std::size_t indexed_size_ = 0;
   std::vector<std::uint32_t> near_patches_;
   std::vector<std::uint32_t> near_;
   std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)

@@ -243,6 +243,15 @@ TEST(NearField, CandidatesListGivesWhatEveryReceiverGives) {
     EXPECT_EQ(listed, scanned);
     EXPECT_NE(listed, shot);  // the correction changed something
   }
+  // A view that changed after candidates() (a piece added to a near patch) gets its new receiver listed.
+  NearFieldCorrection correction(4.0);
+  correction.set_patches(centroids, radii);
+  EXPECT_EQ(correction.candidates(shooter, scene.view)[scene.wall[0]], 1);
+  const std::uint32_t added = scene.view.add(scene.view.polygon(scene.wall[0]), scene.view.plane(scene.wall[0]),
+                                             scene.view.surface(scene.wall[0]), scene.view.patch(scene.wall[0]));
+  const std::span<const std::uint8_t> flags = correction.candidates(shooter, scene.view);
+  ASSERT_EQ(flags.size(), scene.view.size());
+  EXPECT_EQ(flags[added], 1);
 }
 
 TEST(NearField, HiddenPartsStayHidden) {
