@@ -249,20 +249,20 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   times_.form_factors += seconds_since(start);
 }
 
-const Rgb& Solver::deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
-                           std::span<Rgb> unshot) {
+inline const Rgb& Solver::deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
+                                  std::span<Rgb> unshot, Rgb& absorbed) {
   const Rgb reflected = d.reflectance * incident;  // flux
   Rgb& b = radiosity[d.leaf];
   b += reflected * d.inverse_area;
   unshot[d.patch] += reflected * d.inverse_patch_area;
-  absorbed_flux_ += (Rgb(1.0) - d.reflectance) * incident * sign;
+  absorbed += (Rgb(1.0) - d.reflectance) * incident * sign;
   return b;
 }
 
 void Solver::receive(mesh::NodeId leaf, const Rgb& incident, double sign) {
   const mesh::NodeId patch = hierarchy_.patch(leaf);
   deposit({material(leaf).reflectance, sign / hierarchy_.area(leaf), sign / hierarchy_.area(patch), leaf, patch},
-          incident, sign, hierarchy_.radiosities(), hierarchy_.unshots());
+          incident, sign, hierarchy_.radiosities(), hierarchy_.unshots(), absorbed_flux_);
 }
 
 bool Solver::shoot_once() { return shoot(scan_patches()); }
@@ -300,20 +300,35 @@ bool Solver::shoot(const PatchScan& scan) {
                       shot_flux.b >= 0.0;
   if (!follow) luminance_revision_ = kNoRevision;
   const std::span<Rgb> radiosity = hierarchy_.radiosities(), unshot = hierarchy_.unshots();
-  for (std::size_t i = 0; i < cache_.size(); ++i) {
+  // The running sums in locals and the arrays through plain pointers: with deposit() as an out-of-line member call
+  // per receiver, each deposit reloaded every member and waited on the previous one's stores. The same additions
+  // in the same order.
+  const std::size_t count = cache_.size();
+  factor_written_.reserve(count);
+  touched_.reserve(count);
+  double* factor = received_factor_.data();
+  double* luminance = luminance_.data();
+  const double* ff = ff_.data();
+  const Deposit* deposits = deposits_.data();
+  const Rgb* emission = emission_.data();
+  Rgb absorbed = absorbed_flux_;
+  double largest = largest_reflected_;
+  for (std::size_t i = 0; i < count; ++i) {
     // A planar surface sends nothing to itself (its own elements included).
-    if (surfaces[i] == shooter_surface || !(ff_[i] > 0.0)) continue;
-    const Deposit& d = deposits_[i];  // receive(leaf, incident, 1) without the lookups
-    const Rgb incident = shot_flux * ff_[i];
-    received_factor_[d.leaf] = ff_[i];
+    if (surfaces[i] == shooter_surface || !(ff[i] > 0.0)) continue;
+    const Deposit& d = deposits[i];  // receive(leaf, incident, 1) without the lookups
+    const Rgb incident = shot_flux * ff[i];
+    factor[d.leaf] = ff[i];
     factor_written_.push_back(d.leaf);
-    const Rgb& b = deposit(d, incident, 1.0, radiosity, unshot);
     touched_.push_back(static_cast<std::uint32_t>(i));
+    const Rgb& b = deposit(d, incident, 1.0, radiosity, unshot, absorbed);
     if (follow) {
-      luminance_[i] = b.luminance();
-      largest_reflected_ = std::max(largest_reflected_, (b - emission_[i]).luminance());
+      luminance[i] = b.luminance();
+      largest = std::max(largest, (b - emission[i]).luminance());
     }
   }
+  absorbed_flux_ = absorbed;
+  largest_reflected_ = largest;
   ++shots_;
 
   if (options_.adaptive) substructure(shooter, shot_flux);

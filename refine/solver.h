@@ -146,10 +146,10 @@ class Solver {
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
   struct Deposit;
   // Adds rho x incident to the leaf's B and its patch's dB (scaled by the inverse areas of d) in the node arrays
-  // (hierarchy_.radiosities() and unshots()), and sign x (1 - rho) x incident to the absorbed flux. Returns the
-  // leaf's new B.
-  const Rgb& deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
-                     std::span<Rgb> unshot);
+  // (hierarchy_.radiosities() and unshots()), and sign x (1 - rho) x incident to `absorbed` (the absorbed flux).
+  // Returns the leaf's new B. Static and inline, so that a shot's loop of deposits keeps its sums in registers.
+  static const Rgb& deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
+                            std::span<Rgb> unshot, Rgb& absorbed);
   // Splits where the shot made radiosity change fast, and re-shoots into the new leaves (see solver.cpp).
   void substructure(mesh::NodeId shooter, const Rgb& shot_flux);
   // Its steps: the leaves whose luminance steps too far from a neighbour's, among those this shot reached, then
