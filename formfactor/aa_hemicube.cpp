@@ -4,8 +4,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <limits>
 
 namespace aarad::formfactor {
 
@@ -91,7 +91,9 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     // within |alpha| + |beta| of that value. One bound per receiver, rounded up into a float.
     const double reach = std::abs(depth.alpha) + std::abs(depth.beta);
     float spread = static_cast<float>(reach);
-    if (spread < reach) spread = std::nextafter(spread, std::numeric_limits<float>::infinity());
+    // One float up (a non-negative finite float's next is its bit pattern plus one: std::nextafter toward
+    // infinity, without the library call per receiver).
+    if (spread < reach) spread = std::bit_cast<float>(std::bit_cast<std::uint32_t>(spread) + 1u);
     // Offers the receiver's entry for pixel (x, y); returns its coverage as the walk will see it.
     const auto offer = [&](int x, int y, double coverage) {
       // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that
