@@ -40,8 +40,8 @@ class ReceiverView {
 
   std::size_t size() const { return planes_.size(); }
   // Names the view's contents: it changes whenever receivers are added or cleared, and no two views that were ever
-  // filled differently share one (a copy keeps its original's). Back ends key what they derive from the view and
-  // keep between shots on it with size() (PreparedReceivers' culling).
+  // filled differently share one (a copy keeps its original's). What is derived from a view and kept between shots
+  // is keyed on it with size() (BackFaceCulling's deciding receivers, the near-field correction's lists).
   std::uint64_t revision() const { return revision_; }
   // The most corners of any receiver (0 when empty).
   std::size_t max_polygon_size() const { return max_polygon_size_; }

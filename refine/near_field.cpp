@@ -44,7 +44,7 @@ void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span
   near_patch_.assign(patch_centroid_.size(), 0);
   near_patches_.clear();
   marked_radius_ = -1.0;
-  listed_view_ = nullptr;
+  listed_revision_ = 0;
   indexed_revision_ = 0;
 }
 
@@ -54,7 +54,7 @@ double NearFieldCorrection::mark_near_patches(const NearFieldShooter& shooter) {
   if (radius == marked_radius_ && shooter.centroid == marked_centroid_) return radius;  // marked already
   marked_centroid_ = shooter.centroid;
   marked_radius_ = radius;
-  listed_view_ = nullptr;
+  listed_revision_ = 0;
   // Every point of a patch lies within its radius of its centroid.
   const double near_distance = reach_ * radius;
   for (std::uint32_t p : near_patches_) near_patch_[p] = 0;
@@ -104,7 +104,7 @@ std::span<const std::uint8_t> NearFieldCorrection::candidates(const NearFieldSho
     std::sort(listed_.begin(), listed_.end());
   }
   for (const std::uint32_t i : listed_) candidate_[i] = 1;
-  listed_view_ = &receivers;
+  listed_revision_ = receivers.revision();
   listed_size_ = receivers.size();
   return candidate_;
 }
@@ -125,7 +125,7 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
 
   // The receivers to look at, in order: the subset, or the receivers of near patches that candidates() listed for
   // this shooter and view, or every receiver.
-  const bool listed = whole_shot && listed_view_ == &receivers && listed_size_ == receivers.size();
+  const bool listed = whole_shot && listed_revision_ == receivers.revision() && listed_size_ == receivers.size();
   const std::span<const std::uint32_t> among = listed ? std::span<const std::uint32_t>(listed_) : subset;
   const std::size_t count = whole_shot && !listed ? receivers.size() : among.size();
   double back_end_total = 0.0, shaped_total = 0.0;

@@ -107,11 +107,11 @@ class NearFieldCorrection {
   Vec3 marked_centroid_{0.0};
   double marked_radius_ = -1.0;
   std::vector<std::uint8_t> candidate_;   // per receiver: candidates()
-  // The receivers candidates() flagged, in order, for the view at listed_view_ of listed_size_ receivers and the
-  // shooter marked then (listed_view_ is null when a later marking made them stale): apply() to a whole shot of
-  // that view looks at these instead of at every receiver.
+  // The receivers candidates() flagged, in order, for the view of revision listed_revision_ with listed_size_
+  // receivers and the shooter marked then (listed_revision_ is 0 when a later marking made them stale): apply() to
+  // a whole shot of that view looks at these instead of at every receiver.
   std::vector<std::uint32_t> listed_;
-  const formfactor::ReceiverView* listed_view_ = nullptr;
+  std::uint64_t listed_revision_ = 0;
   std::size_t listed_size_ = 0;
   // The view's receivers grouped by patch id (the receivers of patch p: by_patch_[patch_start_[p] ..
   // patch_start_[p + 1]), in receiver order), for the view of revision indexed_revision_ and indexed_size_
