@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -189,6 +190,34 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
   EXPECT_EQ(faces(sparse), (std::vector<bool>{true}));
   sparse.add(testing::rectangle({0, 0, 2}, {0, 1, 0}, {1, 0, 0}), Plane{{0, 0, 1}, -2.0}, 0, 1u << 30);
   EXPECT_EQ(faces(sparse), (std::vector<bool>{true, false}));  // each receiver's own plane
+}
+
+TEST(HemicubeGeometry, ReceiverViewRevisionNamesItsContents) {
+  // What back ends keep between shots is keyed on the view's revision: every change of contents gives a new one,
+  // never one another view had; a copy, with the same contents, keeps its original's.
+  ReceiverView a, b;
+  EXPECT_NE(a.revision(), b.revision());
+  std::vector<std::uint64_t> seen{a.revision(), b.revision()};
+  const auto fresh = [&](std::uint64_t r) {
+    const bool is_new = std::find(seen.begin(), seen.end(), r) == seen.end();
+    seen.push_back(r);
+    return is_new;
+  };
+  testing::add(a, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);
+  EXPECT_TRUE(fresh(a.revision()));
+  const ReceiverView copy = a;
+  EXPECT_EQ(copy.revision(), a.revision());
+  b.start_from_points_of(a);
+  EXPECT_TRUE(fresh(b.revision()));
+  b.append_from(a, 0, 1);
+  EXPECT_TRUE(fresh(b.revision()));
+  const std::uint64_t before = b.revision();
+  b.append_from(a, 1, 1);  // nothing appended: the same contents
+  EXPECT_EQ(b.revision(), before);
+  a.clear();
+  EXPECT_TRUE(fresh(a.revision()));
+  testing::add(a, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);
+  EXPECT_TRUE(fresh(a.revision()));  // contents equal to an earlier revision's: a new one all the same
 }
 
 TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
