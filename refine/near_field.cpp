@@ -126,11 +126,12 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
   // The receivers to look at, in order: the subset, or the receivers of near patches that candidates() listed for
   // this shooter and view, or every receiver.
   const bool listed = whole_shot && listed_revision_ == receivers.revision() && listed_size_ == receivers.size();
+  const bool every = whole_shot && !listed;
   const std::span<const std::uint32_t> among = listed ? std::span<const std::uint32_t>(listed_) : subset;
-  const std::size_t count = whole_shot && !listed ? receivers.size() : among.size();
+  const std::size_t count = every ? receivers.size() : among.size();
   double back_end_total = 0.0, shaped_total = 0.0;
   for (std::size_t k = 0; k < count; ++k) {
-    const std::uint32_t i = whole_shot && !listed ? static_cast<std::uint32_t>(k) : among[k];
+    const std::uint32_t i = every ? static_cast<std::uint32_t>(k) : among[k];
     if (!(ff[i] > 0.0)) continue;  // hidden, culled or behind: nothing to shape
     if (!near_patch(receivers.patch(i))) continue;
     const std::span<const Vec3> polygon = receivers.polygon(i);

@@ -247,8 +247,11 @@ TEST(NearField, CandidatesListGivesWhatEveryReceiverGives) {
   NearFieldCorrection correction(4.0);
   correction.set_patches(centroids, radii);
   EXPECT_EQ(correction.candidates(shooter, scene.view)[scene.wall[0]], 1);
-  const std::uint32_t added = scene.view.add(scene.view.polygon(scene.wall[0]), scene.view.plane(scene.wall[0]),
-                                             scene.view.surface(scene.wall[0]), scene.view.patch(scene.wall[0]));
+  // A copy of the piece's corners: add() appends to the array polygon() reads from.
+  const std::vector<Vec3> piece(scene.view.polygon(scene.wall[0]).begin(), scene.view.polygon(scene.wall[0]).end());
+  const Plane plane = scene.view.plane(scene.wall[0]);
+  const std::uint32_t added =
+      scene.view.add(piece, plane, scene.view.surface(scene.wall[0]), scene.view.patch(scene.wall[0]));
   const std::span<const std::uint8_t> flags = correction.candidates(shooter, scene.view);
   ASSERT_EQ(flags.size(), scene.view.size());
   EXPECT_EQ(flags[added], 1);
