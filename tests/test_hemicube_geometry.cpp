@@ -19,6 +19,17 @@ namespace {
 
 using testing::Polygon;
 
+// The exactness arguments of hemicube_geometry.h take every product as rounded before the sum it feeds. aarad_core
+// passes -ffp-contract=off to everything that includes its headers; without it, GCC fuses a * b + c into one fma
+// whenever the target has FMA (-march=native), and the office scene's adaptive mesh came out different, with a
+// non-manifold vertex. Here a * b = 1 - 2^-54 exactly, which rounds to 1: a * b - 1 is 0 rounded twice and -2^-54
+// fused. The operands are read through volatile, so the compiler cannot fold the expression.
+TEST(HemicubeGeometry, ProductsAreRoundedBeforeTheyAreAdded) {
+  volatile double va = 1.0 + 0x1p-27, vb = 1.0 - 0x1p-27, vc = -1.0;
+  const double a = va, b = vb, c = vc;
+  EXPECT_EQ(a * b + c, 0.0);
+}
+
 TEST(HemicubeGeometry, ExactDeltaTablesSumToOne) {
   for (int n : {2, 7, 100, 101, 300}) {
     const HemicubeGeometry g(n);
