@@ -6,10 +6,14 @@
 // OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back appends a default-constructed colour, whose
 // components VectorT leaves uninitialized until they are set; GCC 12 reports that as -Wmaybe-uninitialized
 // from a system header. Every colour is assigned before the mesh is written.
+#if defined(__GNUC__) && !defined(__clang__)  // a GCC warning; Clang has no such group
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <OpenMesh/Core/IO/MeshIO.hh>
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 
 #include "mesh/export_ply.h"
 

@@ -2,7 +2,9 @@
 // the PLY through OpenMesh), no temporary file is left, and the report has every field of the contract.
 // OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back trips GCC 12's -Wmaybe-uninitialized when
 // instantiated here (a false positive in a system header, reported at the end of the file).
+#if defined(__GNUC__) && !defined(__clang__)  // a GCC warning; Clang has no such group
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 #include "core/builtin_scenes.h"
 #include "core/image.h"
