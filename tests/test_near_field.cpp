@@ -236,7 +236,9 @@ TEST(NearField, CandidatesListGivesWhatEveryReceiverGives) {
     const std::span<const std::uint8_t> flags = listing.candidates(*asked, scene.view);
     const auto flagged = std::count(flags.begin(), flags.end(), std::uint8_t{1});
     EXPECT_GT(flagged, 0);
-    if (asked == &away) EXPECT_LT(flagged, static_cast<long>(scene.wall.size()));  // fewer than the whole wall
+    if (asked == &away) {
+      EXPECT_LT(flagged, static_cast<long>(scene.wall.size()));  // fewer than the whole wall
+    }
     std::vector<double> listed = shot, scanned = shot;
     listing.apply(shooter, scene.view, {}, listed);
     scanning.apply(shooter, scene.view, {}, scanned);
