@@ -110,7 +110,10 @@ bool contains(std::span<const Vec2> polygon, const Vec2& p) {
   for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
     const Vec2& a = polygon[i];
     const Vec2& b = polygon[j];
-    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
+    if ((a.y > p.y) == (b.y > p.y)) continue;  // the edge does not cross the horizontal line through p
+    // p lies left of the crossing exactly when it lies left of the edge taken upwards.
+    const bool upwards = b.y > a.y;
+    if (orientation(upwards ? a : b, upwards ? b : a, p) == Sign::kPositive) in = !in;
   }
   return in;
 }

@@ -29,8 +29,9 @@ double planarity_deviation(std::span<const Vec3> polygon);
 double signed_area(std::span<const Vec2> polygon);
 bool is_convex(std::span<const Vec2> polygon);  // strictly or with collinear vertices; either winding
 bool is_simple(std::span<const Vec2> polygon);  // no two non-adjacent edges touch, adjacent ones meet only at their shared vertex
-// Crossing-number test of a point against a simple polygon, in doubles: a point on the boundary may go either
-// way, so callers ask about points that are not on it (a triangle's centroid, a face's area centroid).
+// Crossing-number test of a point against a simple polygon, each crossing decided by an exact orientation
+// predicate: a point off the boundary is classified exactly, however near the boundary it lies. A point on the
+// boundary may go either way, so callers ask about points off it (a triangle's centroid, a face's area centroid).
 bool contains(std::span<const Vec2> polygon, const Vec2& p);
 
 // Ear clipping of a simple polygon given counter-clockwise in 2D: appends index triples (counter-clockwise) to
