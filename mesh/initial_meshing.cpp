@@ -262,19 +262,53 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   std::vector<std::vector<Vec2>> polygons;
   std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
   Cdt cdt;
+  std::vector<Vec2> vertices;  // every face's vertices, sorted by x (with repeats)
   for (const std::uint32_t fi : surface.faces) {
     const Face& face = scene.faces[fi];
     std::vector<Vec2> polygon;
     for (const Vec3& v : face.vertices) {
       polygon.push_back(frame.to_2d(v));
       original.emplace(std::make_pair(polygon.back().x, polygon.back().y), v);
+      vertices.push_back(polygon.back());
     }
+    polygons.push_back(std::move(polygon));
+  }
+  std::sort(vertices.begin(), vertices.end(), [](const Vec2& p, const Vec2& q) { return p.x < q.x; });
+  // Every face edge is a constraint, split at the other faces' vertices that lie within `weld` of it but not on it
+  // (a T-junction written a rounding error off the edge, as exporters do). Left as they are, the sliver between the
+  // edge and the vertex is a gap in the surface, which the mesher either refines down to the rounding error (where
+  // CGAL's inexact constructions broke the triangulation: a crash) or leaves as a hole. Split, both faces share the
+  // edge's pieces. `weld` is the import's tolerance for faces joining one plane (core/scene.cpp).
+  const double weld = 1e-6 * scene.diagonal();
+  std::vector<std::pair<double, Vec2>> cuts;  // along an edge: parameter, point
+  for (const std::vector<Vec2>& polygon : polygons) {
     for (std::size_t i = 0; i < polygon.size(); ++i) {
       const Vec2& a = polygon[i];
       const Vec2& b = polygon[(i + 1) % polygon.size()];
-      if (a != b) cdt.insert_constraint(Point2(a.x, a.y), Point2(b.x, b.y));
+      if (a == b) continue;
+      const Vec2 d = b - a;
+      const double length2 = glm::dot(d, d);
+      cuts.clear();
+      const auto first = std::lower_bound(vertices.begin(), vertices.end(), std::min(a.x, b.x) - weld,
+                                          [](const Vec2& p, double x) { return p.x < x; });
+      for (auto it = first; it != vertices.end() && it->x <= std::max(a.x, b.x) + weld; ++it) {
+        const Vec2& v = *it;
+        if (v == a || v == b) continue;
+        const double t = glm::dot(v - a, d) / length2;
+        if (!(t > 0.0 && t < 1.0)) continue;
+        const Vec2 off = v - (a + t * d);
+        // A vertex exactly on the edge splits the constraint in the triangulation itself.
+        if (glm::dot(off, off) <= weld * weld && orientation(a, b, v) != Sign::kZero) cuts.emplace_back(t, v);
+      }
+      std::sort(cuts.begin(), cuts.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+      Vec2 from = a;
+      for (const auto& [t, v] : cuts) {
+        if (v == from) continue;  // a vertex of several faces
+        cdt.insert_constraint(Point2(from.x, from.y), Point2(v.x, v.y));
+        from = v;
+      }
+      cdt.insert_constraint(Point2(from.x, from.y), Point2(b.x, b.y));
     }
-    polygons.push_back(std::move(polygon));
   }
   auto in_domain = [&](const Vec2& p) {
     return std::any_of(polygons.begin(), polygons.end(), [&](const auto& poly) { return contains(poly, p); });

@@ -174,6 +174,26 @@ TEST(Hierarchy, CornersOfANearlyPlanarQuadAreMovedOntoItsPlane) {
   EXPECT_TRUE(violations.empty()) << violations.size() << ": " << describe(violations).substr(0, 300);
 }
 
+// A T-junction written a little off the edge, as exporters round it: the vertex (1, 1 + gap) of the two upper faces
+// should lie on the lower face's top edge. Up to the import's tolerance (1e-6 of the diagonal) the edge is split at
+// it, so the faces share the edge's pieces and no sliver is left between them. Unsplit, gaps of one ulp to 1e-9
+// crashed CGAL's mesher (its inexact constructions broke the triangulation refining the sliver), and larger ones
+// left a sliver hole.
+TEST(Hierarchy, TJunctionsARoundingErrorOffTheEdgeAreJoined) {
+  for (const double gap : {std::nextafter(1.0, 2.0) - 1.0, 1e-15, 1e-12, 1e-9, 1e-7, -1e-9}) {
+    const double y = 1.0 + gap;
+    const Hierarchy h(faces_scene({{{0, 0}, {2, 0}, {2, 1}, {0, 1}},
+                                   {{0, 1}, {1, y}, {1, 2}, {0, 2}},
+                                   {{1, y}, {2, 1}, {2, 2}, {1, 2}}}),
+                      sizes(0.5, 0.25));
+    // The square [0, 2]^2 with no hole: the sliver between the faces (area |gap|) belongs to the lower face's
+    // patches, whose top edge now runs through the joined vertex.
+    EXPECT_NEAR(total_leaf_area(h), 4.0, 1e-12) << gap;
+    const auto violations = check_invariants(h);
+    EXPECT_TRUE(violations.empty()) << gap << ": " << describe(violations).substr(0, 300);
+  }
+}
+
 TEST(Hierarchy, PatchNotCutFurtherStillHasOneElementChild) {
   const Hierarchy h(test::square_scene(), sizes(1.0, 1.0));
   ASSERT_EQ(h.patches().size(), 1u);
