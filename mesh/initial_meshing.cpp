@@ -262,12 +262,31 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   std::vector<std::vector<Vec2>> polygons;
   std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
   Cdt cdt;
+  // Features below `weld`, the import's tolerance for faces joining one plane (core/scene.cpp), are rounding errors
+  // of the file: the mesher would refine down to them, until CGAL's inexact constructions break the triangulation
+  // (a crash, for vertices or gaps of one ulp to 1e-9). So a vertex within `weld` of an earlier one is that vertex
+  // (the first of a cluster, in face order, is kept, with its 3D position), and below, an edge passing within
+  // `weld` of another vertex is split there.
+  const double weld = 1e-6 * scene.diagonal();
+  std::map<std::pair<double, double>, std::vector<Vec2>> cells;  // kept vertices by cell of side `weld`
+  const auto welded = [&](const Vec2& p) {
+    const double cx = std::floor(p.x / weld), cy = std::floor(p.y / weld);
+    for (double i = cx - 1.0; i <= cx + 1.0; i += 1.0)
+      for (double j = cy - 1.0; j <= cy + 1.0; j += 1.0) {
+        const auto cell = cells.find({i, j});
+        if (cell == cells.end()) continue;
+        for (const Vec2& q : cell->second)
+          if (glm::dot(p - q, p - q) <= weld * weld) return q;
+      }
+    cells[{cx, cy}].push_back(p);
+    return p;
+  };
   std::vector<Vec2> vertices;  // every face's vertices, sorted by x (with repeats)
   for (const std::uint32_t fi : surface.faces) {
     const Face& face = scene.faces[fi];
     std::vector<Vec2> polygon;
     for (const Vec3& v : face.vertices) {
-      polygon.push_back(frame.to_2d(v));
+      polygon.push_back(welded(frame.to_2d(v)));
       original.emplace(std::make_pair(polygon.back().x, polygon.back().y), v);
       vertices.push_back(polygon.back());
     }
@@ -276,10 +295,8 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   std::sort(vertices.begin(), vertices.end(), [](const Vec2& p, const Vec2& q) { return p.x < q.x; });
   // Every face edge is a constraint, split at the other faces' vertices that lie within `weld` of it but not on it
   // (a T-junction written a rounding error off the edge, as exporters do). Left as they are, the sliver between the
-  // edge and the vertex is a gap in the surface, which the mesher either refines down to the rounding error (where
-  // CGAL's inexact constructions broke the triangulation: a crash) or leaves as a hole. Split, both faces share the
-  // edge's pieces. `weld` is the import's tolerance for faces joining one plane (core/scene.cpp).
-  const double weld = 1e-6 * scene.diagonal();
+  // edge and the vertex is a gap in the surface, which the mesher either refines down to the rounding error (a
+  // crash) or leaves as a hole. Split, both faces share the edge's pieces.
   std::vector<std::pair<double, Vec2>> cuts;  // along an edge: parameter, point
   for (const std::vector<Vec2>& polygon : polygons) {
     for (std::size_t i = 0; i < polygon.size(); ++i) {

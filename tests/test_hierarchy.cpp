@@ -178,8 +178,8 @@ TEST(Hierarchy, CornersOfANearlyPlanarQuadAreMovedOntoItsPlane) {
 // should lie on the lower face's top edge. Up to the import's tolerance (1e-6 of the diagonal) the edge is split at
 // it, so the faces share the edge's pieces and no sliver is left between them. Unsplit, gaps of one ulp to 1e-9
 // crashed CGAL's mesher (its inexact constructions broke the triangulation refining the sliver), and larger ones
-// left a sliver hole.
-TEST(Hierarchy, TJunctionsARoundingErrorOffTheEdgeAreJoined) {
+// left a sliver hole. Vertices that close to each other are joined for the same reason.
+TEST(Hierarchy, TJunctionsAndVerticesARoundingErrorApartAreJoined) {
   for (const double gap : {std::nextafter(1.0, 2.0) - 1.0, 1e-15, 1e-12, 1e-9, 1e-7, -1e-9}) {
     const double y = 1.0 + gap;
     const Hierarchy h(faces_scene({{{0, 0}, {2, 0}, {2, 1}, {0, 1}},
@@ -191,6 +191,18 @@ TEST(Hierarchy, TJunctionsARoundingErrorOffTheEdgeAreJoined) {
     EXPECT_NEAR(total_leaf_area(h), 4.0, 1e-12) << gap;
     const auto violations = check_invariants(h);
     EXPECT_TRUE(violations.empty()) << gap << ": " << describe(violations).substr(0, 300);
+  }
+  // Two vertices a rounding error apart: the lower face's (1, 1) and the upper faces' (1 + shift, 1). Within the
+  // tolerance they are one vertex; unjoined, the tiny edge between them crashed the mesher as well.
+  for (const double shift : {std::nextafter(1.0, 2.0) - 1.0, 1e-12, 1e-9, -1e-9}) {
+    const double x = 1.0 + shift;
+    const Hierarchy h(faces_scene({{{0, 0}, {2, 0}, {2, 1}, {1, 1}, {0, 1}},
+                                   {{0, 1}, {x, 1}, {1, 2}, {0, 2}},
+                                   {{x, 1}, {2, 1}, {2, 2}, {1, 2}}}),
+                      sizes(0.5, 0.25));
+    EXPECT_NEAR(total_leaf_area(h), 4.0, 1e-12) << shift;
+    const auto violations = check_invariants(h);
+    EXPECT_TRUE(violations.empty()) << shift << ": " << describe(violations).substr(0, 300);
   }
 }
 
