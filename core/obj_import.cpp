@@ -410,6 +410,11 @@ std::vector<std::vector<Vec3>> checked_face(std::vector<Vec3> v, const std::stri
   Vec3 lo = v[0], hi = v[0];
   for (const Vec3& p : v) lo = glm::min(lo, p), hi = glm::max(hi, p);
   const double size = glm::length(hi - lo);
+  if (!std::isfinite(size * size)) {
+    warnings.push_back(InputError::format(path, line, "face too large (its area overflows a double) skipped; scale "
+                                                      "the scene down"));
+    return {};
+  }
 
   // A reference plane that exists even when the Newell area vanishes (a symmetric bow-tie): through the
   // vertex farthest from v0 and the vertex farthest from that line.
@@ -573,7 +578,8 @@ Scene import_obj(const std::string& obj_path) {
     return cycle;
   };
 
-  std::size_t face_number = 0;
+  std::size_t face_number = 0, skipped_faces = 0;
+  std::string first_skip;  // the warning of the first face checked_face skipped
   bool unassigned_faces = false;
   for (const auto& shape : shapes) {
     std::string group_name = trim(shape.name);
@@ -596,7 +602,10 @@ Scene import_obj(const std::string& obj_path) {
       offset += count;
 
       const auto polygons = checked_face(std::move(vertices), obj_path, line, warnings);
-      if (polygons.empty()) continue;
+      if (polygons.empty()) {
+        if (skipped_faces++ == 0) first_skip = warnings.back();
+        continue;
+      }
       const int parsed_material = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
       std::uint32_t material;
       if (parsed_material >= 0 && static_cast<std::size_t>(parsed_material) < material_index.size()) {
@@ -625,6 +634,9 @@ Scene import_obj(const std::string& obj_path) {
     warnings.push_back(InputError::format(obj_path, 0, "faces without a material use the default (reflectance 0.5 "
                                                        "grey, no emission); add an MTL file with mtllib and usemtl"));
 
+  if (scene.faces.empty() && skipped_faces > 0)  // the warnings would be lost with the error: name the first
+    throw InputError(obj_path, 0, "no usable faces: all " + std::to_string(skipped_faces) + " faces were skipped; the first: " +
+                                      first_skip);
   if (scene.faces.empty())
     throw InputError(obj_path, 0, "no usable faces; the file needs at least one polygon ('f' line)");
   scene.camera = text.camera;

@@ -218,6 +218,20 @@ TEST_F(SceneImport, import_empty_file_is_error) {
   EXPECT_NE(e.message().find("no usable faces"), std::string::npos);
 }
 
+// When every face is skipped, the error says so and names the first one (the warnings are not shown with an error).
+TEST_F(SceneImport, import_with_every_face_skipped_names_the_first) {
+  const InputError e = import_error(
+      write("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 4\n"));
+  EXPECT_NE(e.message().find("all 2 faces were skipped"), std::string::npos) << e.message();
+  EXPECT_NE(e.message().find("degenerate.obj:5: face of zero area"), std::string::npos) << e.message();
+  // A face whose area overflows a double is skipped with its own reason, not taken for a line.
+  const Scene scene = import_obj(write("vast_face.obj", "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 1 0 0\nv 0 1 0\n"
+                                                        "f 1 2 3\nf 1 4 5\n"));
+  EXPECT_EQ(scene.faces.size(), 1u);
+  ASSERT_FALSE(scene.warnings.empty());
+  EXPECT_NE(scene.warnings.front().find("vast_face.obj:6: face too large"), std::string::npos) << scene.warnings.front();
+}
+
 // ---- Warnings: skipped and split faces -----------------------------------------------------------------
 
 TEST_F(SceneImport, import_degenerate_faces_are_skipped_with_warning) {
