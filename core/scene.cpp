@@ -18,9 +18,8 @@ namespace aarad {
 namespace {
 
 // Planes of two faces agree when their unit normals differ by less than about 1.4e-5 radians and every
-// vertex of the second lies within kPlaneDistance x the scene diagonal of the first face's plane.
+// vertex of the second lies within kPlaneDistance (scene.h) x the scene diagonal of the first face's plane.
 constexpr double kNormalDotTolerance = 1e-10;
-constexpr double kPlaneDistance = 1e-6;
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 

@@ -18,6 +18,10 @@ namespace aarad {
 // sum finite. Radiosity is linear in the emission, so a scene can always be scaled into them.
 inline constexpr double kMaxEmission = 1e100;
 inline constexpr double kMaxEmittedFlux = 1e200;
+// Distances below this fraction of the scene's diagonal are rounding errors of the input: faces whose vertices lie
+// that close to one plane join one surface (build_surfaces), and the initial meshing joins vertices, and T-junctions,
+// that close to each other.
+inline constexpr double kPlaneDistance = 1e-6;
 
 struct Material {
   std::string name;

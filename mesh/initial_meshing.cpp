@@ -262,12 +262,12 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   std::vector<std::vector<Vec2>> polygons;
   std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
   Cdt cdt;
-  // Features below `weld`, the import's tolerance for faces joining one plane (core/scene.cpp), are rounding errors
+  // Features below `weld`, the import's tolerance for faces joining one plane (kPlaneDistance), are rounding errors
   // of the file: the mesher would refine down to them, until CGAL's inexact constructions break the triangulation
   // (a crash, for vertices or gaps of one ulp to 1e-9). So a vertex within `weld` of an earlier one is that vertex
   // (the first of a cluster, in face order, is kept, with its 3D position), and below, an edge passing within
   // `weld` of another vertex is split there.
-  const double weld = 1e-6 * scene.diagonal();
+  const double weld = kPlaneDistance * scene.diagonal();
   std::map<std::pair<double, double>, std::vector<Vec2>> cells;  // kept vertices by cell of side `weld`
   const auto welded = [&](const Vec2& p) {
     const double cx = std::floor(p.x / weld), cy = std::floor(p.y / weld);
