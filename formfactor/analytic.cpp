@@ -79,7 +79,7 @@ void AnalyticBackend::compute(const Shooter& shooter, const ReceiverView& receiv
       }
       const std::span<const Vec3> polygon = receivers.polygon(i);
       s.local.resize(polygon.size());
-      s.clipped.resize(polygon.size() + 1);
+      s.clipped.resize(plane_clipped_capacity(polygon.size()));
       bool behind = false, crossing = false;
       for (std::size_t v = 0; v < polygon.size(); ++v) {
         s.local[v] = to_local(shooter, polygon[v]);

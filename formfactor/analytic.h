@@ -22,8 +22,8 @@ double polygon_form_factor(const Vec3& point, const Vec3& normal, std::span<cons
 
 // Clips a polygon given in the shooter's local coordinates (w = height above the shooter's plane, exactly
 // signed; hemicube_geometry.h to_local) to w >= 0 (Sutherland-Hodgman, intersection from the edge's endpoints
-// in canonical order, snapped to w = 0). Writes at most polygon.size() + 1 vertices to `out`; returns the count
-// (0 when nothing is left).
+// in canonical order, snapped to w = 0). Writes at most plane_clipped_capacity(polygon.size()) vertices to `out`
+// (polygon.size() + 1 for a convex polygon); returns the count (0 when nothing is left).
 std::size_t clip_to_front(std::span<const Vec3> local_polygon, std::span<Vec3> out);
 
 // The analytic back end: for every receiver of the subset that faces the shooter (back-face culling per

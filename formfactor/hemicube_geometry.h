@@ -207,8 +207,17 @@ inline std::uint32_t frustum_outcode(const Vec3& local) {
   return below | halves | detail::kOutcodeTables.negative[negative] | detail::kOutcodeTables.positive[positive];
 }
 
-// Largest number of vertices clip_to_face can return for an m-gon: every plane adds at most one.
-inline constexpr std::size_t clipped_capacity(std::size_t m) { return m + 4; }
+// Largest number of vertices one Sutherland-Hodgman pass against a plane can write for an m-gon, convex or
+// concave: m + floor(m / 2). The pass writes every vertex inside and two crossings per run of vertices outside;
+// each such run holds at least one vertex and is followed by at least one inside, so there are at most m / 2 of
+// them and each adds at most one vertex net. (A convex polygon has at most one run: m + 1.)
+inline constexpr std::size_t plane_clipped_capacity(std::size_t m) { return m + m / 2; }
+
+// Largest number of vertices clip_to_face can return for an m-gon: four planes.
+inline constexpr std::size_t clipped_capacity(std::size_t m) {
+  for (int plane = 0; plane < 4; ++plane) m = plane_clipped_capacity(m);
+  return m;
+}
 
 // Clips a polygon given in local coordinates to the frustum of `face` (Sutherland-Hodgman with exact
 // sidedness, canonical intersection points and snapping; see the top of this file) and returns the polygon

@@ -23,7 +23,7 @@ double unoccluded_factor(const Vec3& point, const Vec3& normal, std::span<const 
                          std::vector<Vec3>& local, std::vector<Vec3>& clipped) {
   const formfactor::Shooter frame = formfactor::Shooter::from_normal(point, normal);
   local.resize(polygon.size());
-  clipped.resize(polygon.size() + 1);
+  clipped.resize(formfactor::plane_clipped_capacity(polygon.size()));
   bool behind = false, in_front = false;
   for (std::size_t v = 0; v < polygon.size(); ++v) {
     local[v] = formfactor::to_local(frame, polygon[v]);

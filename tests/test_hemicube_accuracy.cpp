@@ -130,6 +130,59 @@ TEST(HemicubeAccuracy, AaHemicubeMatchesTheOffAxisDiskClosedForm) {
   std::printf("off-axis disk: AA N=100 %.7f, published 0.4379826, relative %.2e\n", f, relative_error(f, published));
 }
 
+// A concave receiver: a comb in the plane x = 1, facing the shooter at the origin (normal +z), whose 21 teeth
+// point up across the shooter's plane z = 0 and across the seam z = 1 between the top face and the +x side face.
+// Its part in front of the shooter is 21 separate triangles (two of them halves at the ends).
+struct Comb {
+  Polygon polygon;
+  std::vector<Polygon> teeth;  // the part with z >= 0, tooth by tooth
+};
+
+Comb comb_across_the_shooters_plane(int gaps) {
+  const auto toward_shooter = [](Polygon p) { return normal(p).x > 0.0 ? reversed(std::move(p)) : p; };
+  Comb comb;
+  const double step = 0.1, apex = 2.0, valley = -1.0;
+  comb.polygon.push_back({1.0, 0.0, -2.0});
+  for (int i = 0; i <= 2 * gaps; ++i) comb.polygon.push_back({1.0, step * i, i % 2 == 0 ? apex : valley});
+  comb.polygon.push_back({1.0, 2.0 * step * gaps, -2.0});
+  comb.polygon = toward_shooter(comb.polygon);
+  // Each slope crosses z = 0 at 2/3 of its run from the apex.
+  const double half_base = step * apex / (apex - valley);
+  for (int tooth = 0; tooth <= gaps; ++tooth) {
+    const double y = 2.0 * step * tooth;
+    const double left = tooth == 0 ? y : y - half_base, right = tooth == gaps ? y : y + half_base;
+    comb.teeth.push_back(toward_shooter({{1.0, left, 0.0}, {1.0, right, 0.0}, {1.0, y, apex}}));
+  }
+  return comb;
+}
+
+TEST(HemicubeAccuracy, ConcaveReceiverClippedByTheShootersPlaneAndAFaceSeam) {
+  const Comb comb = comb_across_the_shooters_plane(20);
+  const Shooter s = Shooter::from_normal(Vec3(0.0), Vec3(0.0, 0.0, 1.0));
+  AnalyticBackend analytic;
+  double reference = 0.0;
+  for (const Polygon& tooth : comb.teeth) reference += single(analytic, s, tooth);
+
+  // Clipping to the front keeps every tooth: more vertices than a convex polygon could get (m + 1), within the
+  // concave bound.
+  std::vector<Vec3> local;
+  for (const Vec3& v : comb.polygon) local.push_back(to_local(s, v));
+  std::vector<Vec3> front(plane_clipped_capacity(local.size()));
+  const std::size_t kept = clip_to_front(local, front);
+  EXPECT_EQ(kept, 3 * comb.teeth.size());  // an apex and two crossings a tooth
+  EXPECT_GT(kept, local.size() + 1);
+  EXPECT_LE(kept, front.size());
+
+  EXPECT_NEAR(single(analytic, s, comb.polygon), reference, 1e-12);
+  AaHemicubeBackend aa(100);
+  const double f = single(aa, s, comb.polygon);
+  EXPECT_LT(relative_error(f, reference), 0.005) << f << " vs " << reference;
+  HemicubeBackend classical(100);
+  EXPECT_NEAR(single(classical, s, comb.polygon), reference, partial_pixel_bound(s, comb.polygon, 100));
+  std::printf("comb of %zu vertices: exact %.9f, AA N=100 %.9f (relative %.2e)\n", comb.polygon.size(), reference, f,
+              relative_error(f, reference));
+}
+
 TEST(HemicubeAccuracy, TiltedRectangleReallyCrossesAFaceSeam) {
   // The "tilted rectangle across a seam" case: its corners, in the shooter's frame, lie in front of the shooter
   // and in the frusta of at least two hemicube faces (frustum_outcode: no outside bit of that face), and the
