@@ -50,6 +50,7 @@ class Checker {
   }
 
   std::vector<Violation> run() {
+    check_finite();
     check_tree();
     check_face_map();
     const bool mesh_ok = check_half_edges();
@@ -59,6 +60,7 @@ class Checker {
       if (m_.options.balance) check_balance();
     }
     check_tiling();
+    check_surface_planes();
     check_radiosity();
     return std::move(violations_);
   }
@@ -92,6 +94,40 @@ class Checker {
       if (!h.is_valid() || mesh_.face_handle(h) != f) return false;
     }
     return false;
+  }
+
+  // Every position, area and radiosity is a finite number (and every area positive). The other checks compare
+  // with tolerances, which a NaN passes.
+  void check_finite() {
+    for (VertexHandle v : mesh_.vertices()) {
+      const Vec3 p = point(v);
+      if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+        report("finite-values", kNoNode, "vertex ", v.idx(), " is at (", p.x, ", ", p.y, ", ", p.z, ")");
+    }
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (!(std::isfinite(m_.area[n]) && m_.area[n] > 0.0))
+        report("finite-values", n, "node ", n, " has area ", m_.area[n]);
+      const Rgb& b = m_.radiosity[n];
+      if (!(std::isfinite(b.r) && std::isfinite(b.g) && std::isfinite(b.b)))
+        report("finite-values", n, "node ", n, " has radiosity (", b.r, ", ", b.g, ", ", b.b, ")");
+    }
+  }
+
+  // The corners of every node lie in the plane of its surface. (check_tiling holds children to their parent's
+  // plane; this holds the patches, and so the whole tree, to the surface's.)
+  void check_surface_planes() {
+    std::vector<Vec3> corners;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (m_.surface[n] >= m_.scene.surfaces.size()) continue;  // reported by check_tree
+      const Plane& plane = h_.plane(n);
+      h_.corners(n, corners);
+      for (const Vec3& p : corners) {
+        const double distance = plane.signed_distance(p);
+        if (!(std::abs(distance) <= length_tolerance_))
+          report("surface-plane", n, "a corner of node ", n, " lies ", distance, " off the plane of surface ",
+                 m_.surface[n]);
+      }
+    }
   }
 
   void check_tree() {

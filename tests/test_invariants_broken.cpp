@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -271,6 +272,34 @@ TEST(InvariantBroken, InnerRadiosityIsNotTheMeanOfItsLeaves) {
   Hierarchy g = refined();
   g.radiosity(g.patches()[0]).r *= 2.0;
   EXPECT_TRUE(reports(check_invariants(g), "radiosity-mean")) << describe(check_invariants(g));
+}
+
+// Values that are not numbers pass every comparison with a tolerance; they are reported by name.
+TEST(InvariantBroken, NotANumberOrInfinityIsReported) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  Hierarchy inner = refined();
+  inner.radiosity(inner.patches()[0]).g = nan;
+  EXPECT_TRUE(reports(check_invariants(inner), "finite-values")) << describe(check_invariants(inner));
+  Hierarchy leaf = refined();
+  leaf.radiosity(left_leaf(leaf)).b = inf;
+  leaf.update_inner_radiosity();
+  EXPECT_TRUE(reports(check_invariants(leaf), "finite-values")) << describe(check_invariants(leaf));
+  Hierarchy area = refined();
+  area.impl().area[left_leaf(area)] = nan;
+  EXPECT_TRUE(reports(check_invariants(area), "finite-values")) << describe(check_invariants(area));
+  Hierarchy vertex = refined();
+  const auto v = LeafMesh::VertexHandle(vertex.impl().corners[left_leaf(vertex)][0]);
+  vertex.impl().mesh.point(v)[1] = nan;
+  EXPECT_TRUE(reports(check_invariants(vertex), "finite-values")) << describe(check_invariants(vertex));
+}
+
+// The whole surface moved off its plane: every child still lies in its parent's plane, but not in the surface's.
+TEST(InvariantBroken, SurfaceMovedOffItsPlane) {
+  Hierarchy h = refined();
+  for (auto v : h.impl().mesh.vertices()) h.impl().mesh.point(v)[2] += 1e-6;
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(reports(violations, "surface-plane")) << describe(violations);
+  EXPECT_FALSE(reports(violations, "children-tile-parent")) << describe(violations);
 }
 
 // A 2 x 1 rectangle a million units from the origin (a building in georeferenced metres), every leaf split
