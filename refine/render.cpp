@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 namespace aarad::refine {
 namespace {
@@ -36,6 +37,15 @@ int clip_near(const std::array<ClipVertex, 3>& in, double near, std::array<ClipV
     }
   }
   return count;
+}
+
+// The pixels [first, last] of an axis of `size` pixels that the screen span [low, high] reaches (first > last when
+// none). Clamped before the conversion to int: a triangle clipped at the near plane can reach far beyond the image,
+// past what an int holds, when the field of view is narrow.
+std::pair<int, int> pixel_span(double low, double high, int size) {
+  const double first = std::clamp(std::floor(low), 0.0, static_cast<double>(size));
+  const double last = std::clamp(std::ceil(high), -1.0, static_cast<double>(size - 1));
+  return {static_cast<int>(first), static_cast<int>(last)};
 }
 
 }  // namespace
@@ -94,10 +104,8 @@ Rendering render(const mesh::DisplayMesh& display, std::span<const Rgb> node_val
       const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
       if (area == 0.0 || !std::isfinite(area)) continue;
       const double sign = area > 0.0 ? 1.0 : -1.0;
-      const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x, b.x, c.x}))));
-      const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x, b.x, c.x}))));
-      const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y, b.y, c.y}))));
-      const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({a.y, b.y, c.y}))));
+      const auto [x0, x1] = pixel_span(std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}), width);
+      const auto [y0, y1] = pixel_span(std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y}), height);
       for (int y = y0; y <= y1; ++y) {
         const double py = y + 0.5;
         for (int x = x0; x <= x1; ++x) {

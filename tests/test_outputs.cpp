@@ -10,6 +10,7 @@
 #include "core/image.h"
 #include "mesh/invariants.h"
 #include "refine/output.h"
+#include "refine/render.h"
 #include "refine/report.h"
 #include "refine/solver.h"
 #include "tests/solver_test_scenes.h"
@@ -176,6 +177,33 @@ TEST_F(OutputsTest, ReportHasEveryFieldOfTheContract) {
     elements += group["elements"].get<std::size_t>();
   }
   EXPECT_EQ(elements, solver_->hierarchy().leaf_count());
+}
+
+// A floor one unit below the eye, reaching from behind the camera far ahead, seen level: it fills the lower half of
+// the image at any field of view. Clipped at the near plane, its triangle reaches screen coordinates far beyond an
+// int when the view is narrow (at half a degree, 3e9 pixels to the side); the pixel range is clamped before it is
+// converted (the conversion gave INT_MIN, and the floor was not drawn).
+TEST(OutputsRender, FloorFromBehindTheCameraFillsTheLowerHalfAtNarrowViews) {
+  mesh::DisplayMesh floor;
+  floor.positions = {{-1e6, -1, -10}, {0, -1, 1e6}, {1e6, -1, -10}};  // counter-clockwise seen from above
+  floor.vertex_values = {Rgb(1.0), Rgb(1.0), Rgb(1.0)};
+  floor.triangles = {{0, 1, 2}};
+  floor.triangle_leaf = {0};
+  const std::vector<Rgb> node_values{Rgb(1.0)};
+  for (const double degrees : {40.0, 5.0, 1.0, 0.5}) {
+    Camera camera;
+    camera.eye = Vec3(0.0);
+    camera.forward = Vec3(0, 0, 1);
+    camera.up = Vec3(0, 1, 0);
+    camera.vertical_fov = degrees * kPi / 180.0;
+    const Rendering r = render(floor, node_values, camera, 64, 64, Shading::kFlat);
+    for (int y = 0; y < 64; ++y) {
+      std::size_t shown = 0;
+      for (int x = 0; x < 64; ++x) shown += r.leaf[static_cast<std::size_t>(y) * 64 + x] != mesh::kNoNode;
+      // Rows below the horizon (y down, the horizon between rows 31 and 32) show the floor, rows above do not.
+      EXPECT_EQ(shown, y >= 32 ? 64u : 0u) << degrees << " degrees, row " << y;
+    }
+  }
 }
 
 TEST(OutputsToneMap, PercentileExposureAndSrgbEncoding) {
