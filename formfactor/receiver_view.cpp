@@ -92,6 +92,8 @@ std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const s
   if (keys.size() != polygon.size())
     throw Error("ReceiverView::add: " + std::to_string(keys.size()) + " keys for " + std::to_string(polygon.size()) +
                 " corners");
+  // On a conflict, the view is left as it was: the keys bound and the points added by this call are taken back.
+  const std::size_t old_points = points_.size(), old_corners = corner_points_.size();
   for (std::size_t k = 0; k < polygon.size(); ++k) {
     const std::size_t key = keys[k];
     if (key >= point_of_key_.size()) point_of_key_.resize(std::max(key + 1, 2 * point_of_key_.size()), kNoPoint);
@@ -100,6 +102,10 @@ std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const s
       point = static_cast<std::uint32_t>(points_.size());
       points_.push_back(polygon[k]);
     } else if (points_[point] != polygon[k]) {
+      for (std::size_t j = 0; j < k; ++j)
+        if (point_of_key_[keys[j]] >= old_points) point_of_key_[keys[j]] = kNoPoint;
+      points_.resize(old_points);
+      corner_points_.resize(old_corners);
       throw Error("ReceiverView::add: key " + std::to_string(key) + " names two different points");
     }
     corner_points_.push_back(point);

@@ -27,8 +27,9 @@ class ReceiverView {
   // Appends a receiver and returns its index.
   std::uint32_t add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface, std::uint32_t patch);
   // The same, with a caller's key per corner (keys[k] for polygon[k]): corners with equal keys share one point.
-  // Equal keys must come with equal coordinates (checked: throws aarad::Error otherwise). Keys are small
-  // integers, such as vertex indices of a mesh: the view keeps a table as long as the largest key.
+  // Equal keys must come with equal coordinates (checked: throws aarad::Error otherwise, and leaves the view as it
+  // was). Keys are small integers, such as vertex indices of a mesh: the view keeps a table as long as the largest
+  // key.
   std::uint32_t add(std::span<const Vec3> polygon, std::span<const std::uint32_t> keys, const Plane& plane,
                     std::uint32_t surface, std::uint32_t patch);
 

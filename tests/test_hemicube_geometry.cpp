@@ -203,6 +203,31 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
   EXPECT_EQ(faces(sparse), (std::vector<bool>{true, false}));  // each receiver's own plane
 }
 
+TEST(HemicubeGeometry, ReceiverViewRefusesConflictingKeysAndStaysAsItWas) {
+  // Keys 0 to 3 name a square's corners; a second square reusing key 2 for another point is refused, and the
+  // view is left as before the call: the same points and corners, and its new keys (4, 5) still free.
+  using testing::rectangle;
+  const Polygon first = rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0});
+  const Polygon second = rectangle({2, 0, 1}, {0, 1, 0}, {1, 0, 0});
+  const Plane plane{{0, 0, -1}, 1.0};
+  const std::uint32_t first_keys[4] = {0, 1, 2, 3}, conflicting[4] = {4, 5, 2, 6}, fresh[4] = {4, 5, 6, 7};
+  ReceiverView view;
+  view.add(first, first_keys, plane, 0, 0);
+  const std::vector<Vec3> points(view.points().begin(), view.points().end());
+  const std::vector<std::uint32_t> corners(view.corner_points().begin(), view.corner_points().end());
+  EXPECT_THROW(view.add(second, conflicting, plane, 0, 1), Error);
+  EXPECT_EQ(view.size(), 1u);
+  EXPECT_EQ(std::vector<Vec3>(view.points().begin(), view.points().end()), points);
+  EXPECT_EQ(std::vector<std::uint32_t>(view.corner_points().begin(), view.corner_points().end()), corners);
+  // Keys 4 and 5 were bound to the second square's first corners before the conflict: free again, they take new
+  // points, and every corner names its own polygon's vertex.
+  view.add(second, fresh, plane, 0, 1);
+  ASSERT_EQ(view.size(), 2u);
+  ASSERT_EQ(view.corner_points().size(), view.vertices().size());
+  for (std::size_t k = 0; k < view.vertices().size(); ++k)
+    EXPECT_EQ(view.points()[view.corner_points()[k]], view.vertices()[k]) << k;
+}
+
 TEST(HemicubeGeometry, ReceiverViewRevisionNamesItsContents) {
   // What back ends keep between shots is keyed on the view's revision: every change of contents gives a new one,
   // never one another view had; a copy, with the same contents, keeps its original's.
