@@ -458,14 +458,9 @@ std::vector<mesh::NodeId> Solver::split_candidates(std::span<const mesh::NodeId>
 }
 
 // After a round of splits (nodes from first_new on are new): takes the split leaves' share of this shot back
-// from their patches' unshot radiosity and the absorbed flux, and from the B the new leaves inherited. Returns
-// the new leaves.
-std::vector<mesh::NodeId> Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes,
-                                                         mesh::NodeId first_new, const Rgb& shot_flux) {
-  std::vector<mesh::NodeId> new_leaves;
-  for (mesh::NodeId node = first_new; node < hierarchy_.node_count(); ++node) {
-    if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
-  }
+// from their patches' unshot radiosity and the absorbed flux, and from the B the new leaves inherited.
+void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
+                                    std::span<const mesh::NodeId> new_leaves, const Rgb& shot_flux) {
   received_factor_.resize(hierarchy_.node_count(), 0.0);
   for (mesh::NodeId old_leaf : split_nodes) {
     if (old_leaf >= first_new) continue;
@@ -479,7 +474,6 @@ std::vector<mesh::NodeId> Solver::take_back_split_shares(std::span<const mesh::N
     hierarchy_.radiosity(leaf) -= inherited_share;
     hierarchy_.unshot(leaf) = Rgb{};
   }
-  return new_leaves;
 }
 
 // The pieces of a split leaf tile it, so the back ends give them together what the leaf got (the AA hemicube to
@@ -520,9 +514,14 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     const auto first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
     const std::vector<mesh::NodeId> split_nodes = split_candidates(candidates);
     if (split_nodes.empty()) break;
-    const std::vector<mesh::NodeId> new_leaves = take_back_split_shares(split_nodes, first_new, shot_flux);
+    std::vector<mesh::NodeId> new_leaves;
+    for (mesh::NodeId node = first_new; node < hierarchy_.node_count(); ++node) {
+      if (hierarchy_.is_leaf(node)) new_leaves.push_back(node);
+    }
 
-    // This shot again, into the new leaves only, every other receiver still occluding.
+    // This shot again, into the new leaves only, every other receiver still occluding. The form factors come
+    // before anything is taken back: should the back end throw, the new leaves keep the share they inherited and
+    // the balance holds.
     cache_.update(hierarchy_);
     subset_.clear();
     for (mesh::NodeId leaf : new_leaves) {
@@ -535,6 +534,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
       if (!near_field_.last_corrected().empty()) share_out_corrected_factors(first_new);
     }
     start = Clock::now();
+    take_back_split_shares(split_nodes, first_new, new_leaves, shot_flux);
     for (mesh::NodeId leaf : new_leaves) {
       const std::uint32_t receiver = cache_.receiver(leaf);
       if (hierarchy_.surface(leaf) == shooter_surface || !(ff_[receiver] > 0.0)) continue;
@@ -552,6 +552,24 @@ void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
   const double total_before = times_.total;
   converged_ = false;
   interrupted_ = false;
+  // Whatever stops the loop, an exception too (from keep_going or a back end), leaves a solution to read: inner
+  // nodes pulled up and the time counted. A solve stopped by an exception counts as interrupted.
+  const auto finish = [&] {
+    pull_up();
+    times_.total = total_before + seconds_since(start);
+  };
+  try {
+    shooting_loop(keep_going, start, total_before);
+  } catch (...) {
+    interrupted_ = true;
+    finish();
+    throw;
+  }
+  finish();
+}
+
+void Solver::shooting_loop(const std::function<bool(const Progress&)>& keep_going, Clock::time_point start,
+                           double total_before) {
   PatchScan scan = scan_patches();
   while (true) {
     if (scan.unshot_fraction < options_.converge) {
@@ -574,8 +592,6 @@ void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
       }
     }
   }
-  pull_up();
-  times_.total = total_before + seconds_since(start);
 }
 
 std::vector<Rgb> Solver::radiosity() const {

@@ -15,6 +15,7 @@
 #include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -85,7 +86,9 @@ class Solver {
   bool shoot_once();
 
   // Shoots until converged, max_shots, or `keep_going` returns false (checked after every shot; it also
-  // reports progress). Sets converged() / interrupted() and the times.
+  // reports progress). Sets converged() / interrupted() and the times. When keep_going or a back end throws, the
+  // exception passes on, and the solution so far stays readable and balanced: interrupted() is true, inner nodes
+  // are pulled up, the times are counted, and every split leaf's share is either taken back and re-shot or kept.
   void run(const std::function<bool(const Progress&)>& keep_going = {});
 
   bool converged() const { return converged_; }
@@ -150,6 +153,10 @@ class Solver {
   // Returns the leaf's new B. Static and inline, so that a shot's loop of deposits keeps its sums in registers.
   static const Rgb& deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
                             std::span<Rgb> unshot, Rgb& absorbed);
+  // The loop of run(): shoots until converged, max_shots, or keep_going returns false. Progress reports the time
+  // since `start` plus `total_before`.
+  void shooting_loop(const std::function<bool(const Progress&)>& keep_going, std::chrono::steady_clock::time_point start,
+                     double total_before);
   // Splits where the shot made radiosity change fast, and re-shoots into the new leaves (see solver.cpp).
   void substructure(mesh::NodeId shooter, const Rgb& shot_flux);
   // Its steps: the leaves whose luminance steps too far from a neighbour's, among those this shot reached, then
@@ -157,8 +164,8 @@ class Solver {
   std::vector<mesh::NodeId> steep_leaves_of_shot();
   std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves);
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
-  std::vector<mesh::NodeId> take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
-                                                   const Rgb& shot_flux);
+  void take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
+                              std::span<const mesh::NodeId> new_leaves, const Rgb& shot_flux);
   // After the near-field correction changed some of the new leaves' factors: scales the new leaves of every split
   // leaf with a corrected piece so that together they get the factor it had received.
   void share_out_corrected_factors(mesh::NodeId first_new);

@@ -3,6 +3,7 @@
 // with the AA hemicube, and the classical hemicube's figures for comparison.
 #include "core/builtin_scenes.h"
 #include "core/error.h"
+#include "mesh/invariants.h"
 #include "refine/solver.h"
 #include "tests/solver_test_scenes.h"
 
@@ -10,6 +11,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <memory>
+#include <stdexcept>
 #include <utility>
 
 namespace aarad::refine {
@@ -316,6 +320,72 @@ TEST(SolverAcceleration, FurnaceStaysWithinOnePercentInFewerShots) {
     EXPECT_LT(faster.worst, 0.05) << relaxation << " " << overshoot;
     EXPECT_LT(faster.shots, plain.shots) << relaxation << " " << overshoot;
   }
+}
+
+// The analytic back end, failing on chosen calls: its re-shoots into new leaves (compute() with a subset) from
+// the `fail_from`-th on, and every call when `fail_all` is set.
+class FailingAnalytic final : public formfactor::FormFactorBackend {
+ public:
+  std::string_view name() const override { return "failing-analytic"; }
+  bool tests_visibility() const override { return analytic_->tests_visibility(); }
+  void compute(const formfactor::Shooter& shooter, const formfactor::ReceiverView& receivers,
+               std::span<const std::uint32_t> subset, std::span<double> out) override {
+    if (!subset.empty() && ++reshoots >= fail_from) throw std::runtime_error("re-shoot failed");
+    analytic_->compute(shooter, receivers, subset, out);
+  }
+  int reshoots = 0;
+  int fail_from = std::numeric_limits<int>::max();
+
+ private:
+  std::unique_ptr<formfactor::FormFactorBackend> analytic_ = formfactor::make_backend("analytic");
+};
+
+// A back end that throws while new leaves are re-shot: the split leaves keep the share they inherited instead of
+// losing it, so the balance holds (it lost 1.6e-3 of the emitted flux in the furnace), and the solve goes on once
+// the back end works again.
+TEST(SolverExceptions, ABackEndFailingInAReshootKeepsTheBalance) {
+  const Scene scene = coloured_cube();
+  auto backend = std::make_unique<FailingAnalytic>();
+  FailingAnalytic& failing = *backend;
+  failing.fail_from = 1;
+  Solver solver(scene, energy_options(1.0), std::move(backend));
+  bool threw = false;
+  for (int shot = 0; shot < 100 && !threw; ++shot) {
+    try {
+      solver.shoot_once();
+    } catch (const std::runtime_error&) {
+      threw = true;
+    }
+  }
+  ASSERT_TRUE(threw) << "no shot split a leaf";
+  const Rgb emitted = solver.emitted_flux();
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(solver.absorbed_flux()[c] + solver.unshot_flux()[c], emitted[c], 1e-9 * emitted[c]) << c;
+    EXPECT_NEAR(solver.escaped_flux()[c], 0.0, 1e-9 * emitted[c]) << c;
+  }
+  failing.fail_from = std::numeric_limits<int>::max();
+  solver.run();
+  ASSERT_TRUE(solver.converged());
+  expect_energy_balance(solver);
+  EXPECT_TRUE(mesh::check_invariants(solver.hierarchy()).empty());
+}
+
+// A progress callback that throws (a caller's time budget, say) stops the solve with a solution to read: inner
+// nodes pulled up, the time counted, and interrupted() set.
+TEST(SolverExceptions, AThrowingProgressCallbackLeavesAReadableSolution) {
+  const Scene scene = coloured_cube();
+  Solver solver(scene, energy_options(1.0));
+  EXPECT_THROW(solver.run([](const Progress& progress) {
+    if (progress.shots == 5) throw std::runtime_error("out of time");
+    return true;
+  }),
+               std::runtime_error);
+  EXPECT_EQ(solver.shots(), 5);
+  EXPECT_TRUE(solver.interrupted());
+  EXPECT_FALSE(solver.converged());
+  EXPECT_GT(solver.times().total, 0.0);
+  const auto violations = mesh::check_invariants(solver.hierarchy());
+  EXPECT_TRUE(violations.empty()) << violations.size() << " violations, the first: " << violations.front().message;
 }
 
 TEST(SolverRelaxation, OutsideOneToTwoIsRefused) {
