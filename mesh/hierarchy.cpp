@@ -184,6 +184,12 @@ Hierarchy& Hierarchy::operator=(Hierarchy&&) noexcept = default;
 
 // --- Queries ----------------------------------------------------------------------------------------------------
 
+// Only leaves have a face in the leaf mesh; an inner node's face index is -1.
+void Hierarchy::require_leaf(NodeId node, const char* query) const {
+  if (node >= impl_->parent.size() || impl_->face[node] < 0)
+    throw Error(std::string("Hierarchy::") + query + ": node " + std::to_string(node) + " is not a leaf");
+}
+
 const Scene& Hierarchy::scene() const { return impl_->scene; }
 const MeshingOptions& Hierarchy::options() const { return impl_->options; }
 std::size_t Hierarchy::node_count() const { return impl_->parent.size(); }
@@ -223,6 +229,7 @@ Vec3 Hierarchy::centroid(NodeId node) const {
   return aarad::centroid(std::span<const Vec3>(p.data(), static_cast<std::size_t>(n)));
 }
 void Hierarchy::leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const {
+  require_leaf(leaf, "leaf_polygon");
   out.clear();
   const LeafMesh& mesh = impl_->mesh;
   for (auto v : mesh.fv_range(FaceHandle(impl_->face[leaf]))) out.push_back(to_vec3(mesh.point(v)));
@@ -298,6 +305,7 @@ std::size_t Hierarchy::memory_bytes() const {
 }
 
 void Hierarchy::edge_neighbours(NodeId node, std::vector<NodeId>& out) const {
+  require_leaf(node, "edge_neighbours");
   out.clear();
   const LeafMesh& mesh = impl_->mesh;
   for (auto h : mesh.fh_range(FaceHandle(impl_->face[node]))) {

@@ -29,9 +29,12 @@ struct MeshingOptions {
   double min_area = 0.0;      // smallest element a split may create; 0 picks a default from the scene's size
   bool balance = false;       // keep edge-neighbours within one level of each other
   // Refuse sizes that would make more initial patches or elements than this, counted per surface before
-  // meshing it (each element costs about a kilobyte through a solve).
+  // meshing it (each element costs about a kilobyte through a solve). At most kMostInitialElements.
   double max_initial_elements = 2e6;
 };
+
+// The largest max_initial_elements (a terabyte of elements; grid indices stay within an int).
+inline constexpr double kMostInitialElements = 1e9;
 
 struct SplitResult {
   bool ok = false;
@@ -69,7 +72,8 @@ class Hierarchy {
   // Vertex indices of the corners, in the same order (the first corner_count(node) are meaningful): corners
   // of different nodes are the same point exactly when their indices are equal.
   std::array<std::uint32_t, 4> corner_vertices(NodeId node) const;
-  // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise.
+  // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise. Throws
+  // aarad::Error when `leaf` is not a leaf (as edge_neighbours does).
   void leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const;
 
   // Radiosity B of every node and unshot radiosity dB (meaningful for patches), per channel.
@@ -129,6 +133,7 @@ class Hierarchy {
   // area was tested.
   Refusal refusal(NodeId node, double& smallest) const;
   std::array<NodeId, 4> split_leaf(NodeId node);  // the split itself, no checks
+  void require_leaf(NodeId node, const char* query) const;  // throws aarad::Error unless `node` is a leaf
   void split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_split);
 
   std::unique_ptr<Impl> impl_;

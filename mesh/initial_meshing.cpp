@@ -371,6 +371,8 @@ MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options
     throw Error("meshing: patch_size, element_size and min_area must be finite and >= 0 (0 picks a default)");
   if (options.max_level < 1 || options.max_level > 60)
     throw Error("meshing: max_level must lie in [1, 60], got " + std::to_string(options.max_level));
+  if (!(options.max_initial_elements >= 1.0 && options.max_initial_elements <= kMostInitialElements))
+    throw Error("meshing: max_initial_elements must lie in [1, 1e9], got " + std::to_string(options.max_initial_elements));
   if (resolved.patch_size == 0.0) resolved.patch_size = d / 8.0;
   if (resolved.element_size == 0.0) resolved.element_size = resolved.patch_size / 2.0;
   if (resolved.min_area == 0.0) resolved.min_area = 1e-7 * d * d;

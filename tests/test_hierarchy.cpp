@@ -76,6 +76,14 @@ TEST(Hierarchy, SizesThatWouldExhaustMemoryOrAreNotFiniteAreRefused) {
     EXPECT_NE(message(square, sizes(bad, 0.1)).find("finite and >= 0"), std::string::npos);
     EXPECT_NE(message(square, sizes(0.5, bad)).find("finite and >= 0"), std::string::npos);
   }
+  // The limit itself: "no limit" (infinity) overflowed the grid's int counts instead of being refused.
+  for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 0.0,
+                           2e9}) {
+    MeshingOptions limit = sizes(0.5, 0.25);
+    limit.max_initial_elements = bad;
+    EXPECT_NE(message(square, limit).find("max_initial_elements must lie in [1, 1e9]"), std::string::npos)
+        << bad << ": " << message(square, limit);
+  }
 }
 
 TEST(Hierarchy, ConvexQuadBecomesABilinearGridOfQuads) {
@@ -360,6 +368,12 @@ TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
   EXPECT_FALSE(inner.ok);
   EXPECT_NE(inner.reason.find("not a leaf"), std::string::npos) << inner.reason;
   EXPECT_EQ(h.leaf_count(), 4u);
+  // Queries of a leaf's face refuse an inner node (they read face -1).
+  std::vector<Vec3> polygon;
+  EXPECT_THROW(h.leaf_polygon(e, polygon), Error);
+  EXPECT_THROW(h.edge_neighbours(e), Error);
+  EXPECT_THROW(h.edge_neighbours(static_cast<NodeId>(h.node_count())), Error);
+  EXPECT_NO_THROW(h.edge_neighbours(first.children[0]));
 
   MeshingOptions small = sizes(1.0, 1.0);
   small.min_area = 0.3;  // children would have 0.25
