@@ -153,6 +153,7 @@ std::string rgb_text(const Rgb& c) { return number_text(c.r) + " " + number_text
 struct ObjText {
   std::vector<Vec3> positions;   // every `v`, parsed with strtod
   std::vector<int> face_lines;   // line of every `f` with at least three vertex references, in order
+  std::vector<std::size_t> face_sizes;  // the number of vertex references on each of those lines
   std::vector<std::pair<int, std::string>> material_libraries;  // (line, file name) per `mtllib` entry
   std::vector<std::pair<int, std::string>> material_uses;       // (line, name) per `usemtl`
   std::optional<Camera> camera;
@@ -260,6 +261,7 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
                                                             "at least three vertices or remove it"));
       } else {
         text.face_lines.push_back(number);
+        text.face_sizes.push_back(t.size() - 1);
       }
     } else if (key == "mtllib") {
       for (std::size_t i = 1; i < t.size(); ++i) text.material_libraries.emplace_back(number, t[i]);
@@ -564,6 +566,15 @@ Scene import_obj(const std::string& obj_path) {
   const std::size_t vertex_count = attrib.vertices.size() / 3;
   const bool positions_known = text.positions.size() == vertex_count;
   const std::string stem = fs::path(obj_path).stem().string();
+  // tinyobjloader keeps a face's vertex count in an unsigned char (mesh_t::num_face_vertices): a face of 256
+  // or more vertices comes back with its count modulo 256, though all its vertex indices are there. The count
+  // on the face's line is the true one; without the lines (never seen), such a face cannot be read.
+  if (!lines_known)
+    for (std::size_t k = 0; k < text.face_sizes.size(); ++k)
+      if (text.face_sizes[k] > std::numeric_limits<unsigned char>::max())
+        throw InputError(obj_path, text.face_lines[k], "face with " + std::to_string(text.face_sizes[k]) +
+                                                           " vertices, more than the 255 the OBJ parser counts; "
+                                                           "split it into faces of at most 255 vertices");
 
   // A face may be written twice (a copy-paste, an exporter's double): its area would count twice, and a lamp's
   // emitted flux too, while the mesh covers it once. Repeats in one group with one material (the same vertex
@@ -588,7 +599,12 @@ Scene import_obj(const std::string& obj_path) {
     std::size_t offset = 0;
     for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face_number) {
       const int line = lines_known ? text.face_lines[face_number] : 0;
-      const std::size_t count = shape.mesh.num_face_vertices[f];
+      const std::size_t parsed_count = shape.mesh.num_face_vertices[f];
+      const std::size_t count = lines_known ? text.face_sizes[face_number] : parsed_count;
+      if (count % 256 != parsed_count || offset + count > shape.mesh.indices.size())
+        throw InputError(obj_path, line, "the OBJ parser read " + std::to_string(parsed_count) + " of this face's " +
+                                             std::to_string(count) + " vertices; split it into faces of at most 255 "
+                                             "vertices");
       std::vector<Vec3> vertices;
       for (std::size_t k = 0; k < count; ++k) {
         const int index = shape.mesh.indices[offset + k].vertex_index;

@@ -4,7 +4,8 @@
 //     group named after the file's stem);
 //   - `Kd` is the reflectance rho per channel, in [0, 1); `Ke` the emitted radiosity, >= 0.
 // tinyobjloader parses the structure (groups, faces, materials); the importer reads the text once more
-// for what tinyobjloader does not keep: line numbers of vertices, faces and material statements, and the
+// for what tinyobjloader does not keep: line numbers of vertices, faces and material statements, the vertex
+// count of each face (tinyobjloader keeps it in 8 bits; faces of 256 and more vertices are read whole), and the
 // coordinates themselves with strtod (correctly rounded, and NaN and infinity recognised).
 //
 // Bad input and what happens (every message names the file and, where there is one, the line):

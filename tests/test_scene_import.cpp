@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 
@@ -303,6 +304,44 @@ TEST_F(SceneImport, import_concave_planar_face_is_kept_whole) {
   EXPECT_EQ(scene.faces[0].vertices.size(), 6u);
   EXPECT_DOUBLE_EQ(scene.surfaces[0].area, 3.0);
   EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+}
+
+// tinyobjloader counts a face's vertices in an unsigned char: a 300-vertex face came back with 44 and the next
+// face in its group was made of the other 256 (a quad turned into a sliver of the disc), a 256-vertex face was
+// skipped as having fewer than three distinct vertices, and a 1000-vertex face kept 232.
+TEST_F(SceneImport, import_faces_of_more_than_255_vertices_are_read_whole) {
+  write("s.mtl", kSquareMtl);
+  const auto disc = [](int n, double y) {
+    std::ostringstream text;
+    text.precision(17);
+    for (int k = 0; k < n; ++k) {
+      const double angle = 2.0 * kPi * k / n;
+      text << "v " << std::cos(angle) << " " << y << " " << -std::sin(angle) << "\n";  // facing +y
+    }
+    return text.str();
+  };
+  const auto face = [](int first, int n) {
+    std::ostringstream text;
+    text << "f";
+    for (int k = 0; k < n; ++k) text << " " << first + k;
+    text << "\n";
+    return text.str();
+  };
+  for (const int n : {255, 256, 300, 1000}) {
+    // Line 1 mtllib, 2 usemtl, n + 4 vertices, then the disc on line n + 7 and the quad on line n + 8, one group.
+    const std::string obj = write("disc.obj", "mtllib s.mtl\nusemtl lamp\n" + disc(n, 0.0) +
+                                                  "v 3 0 0\nv 3 0 -1\nv 4 0 -1\nv 4 0 0\n" + face(1, n) +
+                                                  face(n + 1, 4));
+    const Scene scene = import_obj(obj);
+    ASSERT_EQ(scene.faces.size(), 2u) << n;
+    EXPECT_EQ(scene.groups.size(), 1u) << n;
+    EXPECT_TRUE(scene.warnings.empty()) << n << ": " << scene.warnings.front();
+    EXPECT_EQ(scene.faces[0].vertices.size(), static_cast<std::size_t>(n));
+    EXPECT_EQ(scene.faces[0].source_line, n + 7);
+    EXPECT_NEAR(area(scene.faces[0].vertices), 0.5 * n * std::sin(2.0 * kPi / n), 1e-12) << n;
+    EXPECT_EQ(scene.faces[1].vertices, (std::vector<Vec3>{{3, 0, 0}, {3, 0, -1}, {4, 0, -1}, {4, 0, 0}})) << n;
+    EXPECT_EQ(scene.faces[1].source_line, n + 8);
+  }
 }
 
 // ---- Groups, surfaces, materials -----------------------------------------------------------------------
