@@ -6,6 +6,7 @@
 #include "core/obj_import.h"
 
 #include "core/error.h"
+#include "core/face_check.h"
 #include "core/polygon.h"
 #include "core/predicates.h"
 
@@ -36,11 +37,6 @@ namespace aarad {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A face is planar when no vertex lies farther than this fraction of its bounding-box diagonal from its
-// plane; its area is zero when below this fraction of the squared diagonal.
-constexpr double kPlanarity = 1e-6;
-constexpr double kZeroArea = 1e-12;
 
 std::vector<std::string> split_tokens(const std::string& line) {
   std::vector<std::string> tokens;
@@ -389,81 +385,43 @@ Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* ent
   return m;
 }
 
-// Checks one face and returns the polygons to add: none (skipped), the face itself, or its triangles.
-std::vector<std::vector<Vec3>> checked_face(std::vector<Vec3> v, const std::string& path, int line,
+// Checks one face (check_face, shared with Scene::validate) and returns the polygons to add: none (skipped), the
+// face itself, or its triangles.
+std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const std::string& path, int line,
                                             std::vector<std::string>& warnings) {
-  // Drop repeated consecutive vertices (cyclically).
-  std::vector<Vec3> distinct;
-  for (const Vec3& p : v)
-    if (distinct.empty() || p != distinct.back()) distinct.push_back(p);
-  while (distinct.size() > 1 && distinct.front() == distinct.back()) distinct.pop_back();
-  std::size_t unique = 0;
-  for (std::size_t i = 0; i < distinct.size() && unique < 3; ++i)
-    if (std::find(distinct.begin(), distinct.begin() + static_cast<std::ptrdiff_t>(i), distinct[i]) ==
-        distinct.begin() + static_cast<std::ptrdiff_t>(i))
-      ++unique;
-  if (unique < 3) {
-    warnings.push_back(InputError::format(path, line, "face with fewer than three distinct vertices skipped; fix its "
-                                                      "vertex indices or remove it"));
-    return {};
+  const FaceCheck check = check_face(face);
+  const auto skip = [&](const std::string& what) {
+    warnings.push_back(InputError::format(path, line, what));
+    return std::vector<std::vector<Vec3>>{};
+  };
+  switch (check.problem) {
+    case FaceProblem::kNone:
+      break;
+    case FaceProblem::kFewerThanThreeDistinct:
+      return skip("face with fewer than three distinct vertices skipped; fix its vertex indices or remove it");
+    case FaceProblem::kTooLarge:
+      return skip("face too large (its area overflows a double) skipped; scale the scene down");
+    case FaceProblem::kCollinear:
+      return skip("face of zero area (all its vertices on one line) skipped; remove it or fix its vertices");
+    case FaceProblem::kSelfIntersecting:
+      throw InputError(path, line, "face intersects itself (two of its edges cross or touch); list its vertices in "
+                                   "order around its boundary, or split it into simple polygons");
+    case FaceProblem::kZeroArea:
+      return skip("face of zero area skipped; remove it or fix its vertices");
   }
-  v = std::move(distinct);
+  const std::vector<Vec3>& v = check.vertices;
+  if (check.planar()) return {v};
 
-  Vec3 lo = v[0], hi = v[0];
-  for (const Vec3& p : v) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  const double size = glm::length(hi - lo);
-  if (!std::isfinite(size * size)) {
-    warnings.push_back(InputError::format(path, line, "face too large (its area overflows a double) skipped; scale "
-                                                      "the scene down"));
-    return {};
-  }
-
-  // A reference plane that exists even when the Newell area vanishes (a symmetric bow-tie): through the
-  // vertex farthest from v0 and the vertex farthest from that line.
-  std::size_t far = 0;
-  for (std::size_t i = 1; i < v.size(); ++i)
-    if (glm::length(v[i] - v[0]) > glm::length(v[far] - v[0])) far = i;
-  Vec3 widest(0.0);
-  for (std::size_t i = 1; i < v.size(); ++i) {
-    const Vec3 c = glm::cross(v[far] - v[0], v[i] - v[0]);
-    if (glm::length(c) > glm::length(widest)) widest = c;
-  }
-  if (glm::length(widest) <= kZeroArea * size * size) {
-    warnings.push_back(InputError::format(path, line, "face of zero area (all its vertices on one line) skipped; "
-                                                      "remove it or fix its vertices"));
-    return {};
-  }
-  const Vec3 newell = vector_area(v);
-  const bool newell_zero = 2.0 * glm::length(newell) <= kZeroArea * size * size;
-  const Vec3 n = newell_zero ? glm::normalize(widest) : glm::normalize(newell);
-
-  std::vector<Vec2> flat(v.size());
-  project_to_2d(v, n, flat);
-  if (!is_simple(flat))
-    throw InputError(path, line, "face intersects itself (two of its edges cross or touch); list its vertices in "
-                                 "order around its boundary, or split it into simple polygons");
-  if (newell_zero) {
-    warnings.push_back(InputError::format(path, line, "face of zero area skipped; remove it or fix its vertices"));
-    return {};
-  }
-
-  Vec3 mean(0.0);
-  for (const Vec3& p : v) mean += p;
-  mean /= static_cast<double>(v.size());
-  double deviation = 0.0;
-  for (const Vec3& p : v) deviation = std::max(deviation, std::abs(glm::dot(n, p - mean)));
-  if (deviation <= kPlanarity * size) return {v};
-
-  // Not planar: ear-clip its projection (counter-clockwise, since n is the Newell normal).
+  // Not planar: ear-clip its projection (counter-clockwise, since the normal is the Newell normal).
   std::vector<std::array<std::size_t, 3>> triangles;
-  ear_clip(flat, triangles);
+  ear_clip(check.flat, triangles);
   std::vector<std::vector<Vec3>> out;
   for (const auto& t : triangles) {
     std::vector<Vec3> tri{v[t[0]], v[t[1]], v[t[2]]};
-    if (2.0 * area(tri) > kZeroArea * size * size) out.push_back(std::move(tri));
+    if (2.0 * area(tri) > kZeroArea * check.size * check.size) out.push_back(std::move(tri));
   }
   warnings.push_back(InputError::format(
-      path, line, "face is not planar (a vertex lies " + number_text(deviation) + " from its plane, more than " +
+      path, line, "face is not planar (a vertex lies " + number_text(check.deviation) + " from its plane, more than " +
                       number_text(kPlanarity) + " of its size); split into " + std::to_string(out.size()) +
                       " triangles. Make the face planar or split it yourself to silence this"));
   return out;
@@ -617,7 +575,7 @@ Scene import_obj(const std::string& obj_path) {
       }
       offset += count;
 
-      const auto polygons = checked_face(std::move(vertices), obj_path, line, warnings);
+      const auto polygons = checked_face(vertices, obj_path, line, warnings);
       if (polygons.empty()) {
         if (skipped_faces++ == 0) first_skip = warnings.back();
         continue;

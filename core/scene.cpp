@@ -5,6 +5,7 @@
 #include "core/scene.h"
 
 #include "core/error.h"
+#include "core/face_check.h"
 #include "core/polygon.h"
 
 #include <algorithm>
@@ -102,12 +103,33 @@ void Scene::validate() const {
   for (const Surface& s : surfaces) surface_faces += s.faces.size();
   if (surface_faces != faces.size())
     throw Error(where + ": physical surfaces are not built; call Scene::build_surfaces() after the last add_face");
-  for (const Face& f : faces) {
+  for (std::size_t fi = 0; fi < faces.size(); ++fi) {
+    const Face& f = faces[fi];
     if (f.vertices.size() < 3) throw InputError(where, f.source_line, "a face has fewer than three vertices");
     for (const Vec3& v : f.vertices)
       if (!finite(v)) throw InputError(where, f.source_line, "a face has a vertex that is not finite");
     if (f.material >= materials.size() || f.group >= groups.size() || f.surface >= surfaces.size())
       throw Error(where + ": a face refers to a material, group or surface that does not exist");
+    // The importer's checks (core/face_check.h): the initial meshing would crash on such a face.
+    const std::string face = "face " + std::to_string(fi) + " (group '" + groups[f.group].name + "')";
+    switch (check_face(f.vertices).problem) {
+      case FaceProblem::kNone:
+        break;
+      case FaceProblem::kFewerThanThreeDistinct:
+        throw InputError(where, f.source_line, face + " has fewer than three distinct vertices; fix or remove it");
+      case FaceProblem::kTooLarge:
+        throw InputError(where, f.source_line, face + " is too large (its area overflows a double); scale the "
+                                                      "scene down");
+      case FaceProblem::kCollinear:
+        throw InputError(where, f.source_line, face + " has zero area (all its vertices on one line); remove it or "
+                                                      "fix its vertices");
+      case FaceProblem::kSelfIntersecting:
+        throw InputError(where, f.source_line, face + " intersects itself (two of its edges cross or touch); list "
+                                                      "its vertices in order around its boundary, or split it into "
+                                                      "simple polygons");
+      case FaceProblem::kZeroArea:
+        throw InputError(where, f.source_line, face + " has zero area; remove it or fix its vertices");
+    }
   }
   Rgb flux{};
   for (const Face& f : faces) flux += materials[f.material].emission * area(f.vertices);

@@ -600,6 +600,40 @@ TEST(SceneModel, scene_validate_rejects_bad_materials) {
   EXPECT_THROW(scene.validate(), InputError);
 }
 
+// A scene built in code is checked as an imported one is (core/face_check.h): a face with its vertices on one
+// line and a bow-tie used to pass and crash the initial meshing (CGAL's refine_Delaunay_mesh_2).
+TEST(SceneModel, scene_validate_rejects_zero_area_and_self_intersecting_faces) {
+  const auto scene_with = [](std::vector<Vec3> face) {
+    Scene scene;
+    scene.name = "handmade";
+    const std::uint32_t light = scene.add_group("light");
+    const std::uint32_t floor = scene.add_group("floor");
+    const std::uint32_t m = scene.add_material({"lamp", Rgb(0.5), Rgb(1.0)});
+    scene.add_face(light, m, {{0, 1, 0}, {1, 1, 0}, {1, 1, 1}, {0, 1, 1}});
+    scene.add_face(floor, m, std::move(face));
+    scene.build_surfaces();
+    return scene;
+  };
+  const auto message = [](const Scene& scene) {
+    try {
+      scene.validate();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "handmade");
+      return e.message();
+    }
+    return std::string("no InputError");
+  };
+  const std::string collinear = message(scene_with({{0, 0, 0}, {0.5, 0, 0.5}, {1, 0, 1}}));
+  EXPECT_NE(collinear.find("face 1 (group 'floor') has zero area (all its vertices on one line)"), std::string::npos)
+      << collinear;
+  const std::string bowtie = message(scene_with({{0, 0, 0}, {1, 0, 1}, {1, 0, 0}, {0, 0, 1}}));
+  EXPECT_NE(bowtie.find("face 1 (group 'floor') intersects itself"), std::string::npos) << bowtie;
+  const std::string two = message(scene_with({{0, 0, 0}, {1, 0, 0}, {0, 0, 0}}));
+  EXPECT_NE(two.find("face 1 (group 'floor') has fewer than three distinct vertices"), std::string::npos) << two;
+  // A repeated vertex is dropped as the importer drops it, and the square is fine.
+  EXPECT_NO_THROW(scene_with({{0, 0, 0}, {0, 0, 1}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}).validate());
+}
+
 // ---- The Cornell box from data/ --------------------------------------------------------------------------
 
 TEST(SceneImportCornell, import_cornell_obj_matches_builtin) {

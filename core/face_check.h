@@ -1,0 +1,43 @@
+// The checks a scene face must pass before it is meshed: at least three distinct vertices, an area that a double
+// holds, not all vertices on one line, and a boundary that does not cross or touch itself. The OBJ importer
+// (core/obj_import.h) skips or rejects a face that fails them, with its file and line; Scene::validate() rejects a
+// scene built in code with such a face. Both ask check_face, so they decide alike. CGAL's mesher crashes on a
+// face that fails them (a zero-area or self-intersecting constraint polygon in refine_Delaunay_mesh_2).
+#pragma once
+
+#include "core/math.h"
+
+#include <span>
+#include <vector>
+
+namespace aarad {
+
+// A face is planar when no vertex lies farther than this fraction of its bounding-box diagonal from its plane;
+// its area is zero when below this fraction of the squared diagonal.
+inline constexpr double kPlanarity = 1e-6;
+inline constexpr double kZeroArea = 1e-12;
+
+enum class FaceProblem {
+  kNone,
+  kFewerThanThreeDistinct,  // fewer than three distinct vertices
+  kTooLarge,                // the squared bounding-box diagonal overflows a double
+  kCollinear,               // all vertices on one line (no two edges from a vertex span an area)
+  kSelfIntersecting,        // two edges cross or touch (decided exactly on the projection to its plane)
+  kZeroArea,                // a simple boundary enclosing no area (Newell area below kZeroArea x size^2)
+};
+
+// What check_face finds. With a problem, the fields after `problem` are valid up to the step that found it.
+struct FaceCheck {
+  FaceProblem problem = FaceProblem::kNone;
+  std::vector<Vec3> vertices;  // the face without repeated consecutive vertices (cyclically)
+  double size = 0.0;           // the diagonal of its axis-aligned bounding box
+  Vec3 normal{0.0};            // unit; the Newell normal (counter-clockwise seen from its tip)
+  std::vector<Vec2> flat;      // `vertices` projected along `normal` (project_to_2d), counter-clockwise
+  double deviation = 0.0;      // the largest distance of a vertex from the plane with `normal` through their mean
+
+  bool planar() const { return deviation <= kPlanarity * size; }
+};
+
+FaceCheck check_face(std::span<const Vec3> vertices);
+
+}  // namespace aarad
