@@ -27,12 +27,20 @@ FaceCheck check_face(std::span<const Vec3> vertices) {
     return check;
   }
 
+  // Within the bounds, the squared lengths below stay inside a double's range wherever a decision depends on them:
+  // at 1e80 they overflowed (a valid face looked self-intersecting), at 1e-100 they underflowed (it looked like a
+  // line).
   Vec3 lo = v[0], hi = v[0];
   for (const Vec3& p : v) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const Vec3 reach = glm::max(glm::abs(lo), glm::abs(hi));
+  if (std::max({reach.x, reach.y, reach.z}) > kMaxCoordinate) {
+    check.problem = FaceProblem::kTooLarge;
+    return check;
+  }
   const double size = glm::length(hi - lo);
   check.size = size;
-  if (!std::isfinite(size * size)) {
-    check.problem = FaceProblem::kTooLarge;
+  if (size < kMinFaceSize) {
+    check.problem = FaceProblem::kTooSmall;
     return check;
   }
 

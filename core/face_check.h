@@ -1,8 +1,9 @@
-// The checks a scene face must pass before it is meshed: at least three distinct vertices, an area that a double
-// holds, not all vertices on one line, and a boundary that does not cross or touch itself. The OBJ importer
-// (core/obj_import.h) skips or rejects a face that fails them, with its file and line; Scene::validate() rejects a
-// scene built in code with such a face. Both ask check_face, so they decide alike. CGAL's mesher crashes on a
-// face that fails them (a zero-area or self-intersecting constraint polygon in refine_Delaunay_mesh_2).
+// The checks a scene face must pass before it is meshed: at least three distinct vertices, a size within the
+// range the solver's doubles handle, not all vertices on one line, and a boundary that does not cross or touch
+// itself. The OBJ importer (core/obj_import.h) skips or rejects a face that fails them, with its file and line;
+// Scene::validate() rejects a scene built in code with such a face. Both ask check_face, so they decide alike.
+// CGAL's mesher crashes on a face that fails them (a zero-area or self-intersecting constraint polygon in
+// refine_Delaunay_mesh_2).
 #pragma once
 
 #include "core/math.h"
@@ -16,11 +17,19 @@ namespace aarad {
 // its area is zero when below this fraction of the squared diagonal.
 inline constexpr double kPlanarity = 1e-6;
 inline constexpr double kZeroArea = 1e-12;
+// The range of scales the solver computes in: no coordinate beyond kMaxCoordinate in magnitude, no face smaller
+// (bounding-box diagonal) than kMinFaceSize. The solver's products of lengths stay far from the ends of a double's
+// range there: the Cornell box (coordinates up to 560) solves as at scale 1 scaled by 1e-64 to 1e58, and fails
+// scaled by 1e60 (an arithmetic exception) or 1e-66 (broken invariants; at 1e-70 all light is lost). Radiosity
+// does not depend on the scene's scale, so a scene can always be scaled into the range.
+inline constexpr double kMaxCoordinate = 1e50;
+inline constexpr double kMinFaceSize = 1e-50;
 
 enum class FaceProblem {
   kNone,
   kFewerThanThreeDistinct,  // fewer than three distinct vertices
-  kTooLarge,                // the squared bounding-box diagonal overflows a double
+  kTooLarge,                // a coordinate beyond kMaxCoordinate in magnitude
+  kTooSmall,                // a bounding-box diagonal below kMinFaceSize
   kCollinear,               // all vertices on one line (no two edges from a vertex span an area)
   kSelfIntersecting,        // two edges cross or touch (decided exactly on the projection to its plane)
   kZeroArea,                // a simple boundary enclosing no area (Newell area below kZeroArea x size^2)

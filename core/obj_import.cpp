@@ -400,7 +400,11 @@ std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const
     case FaceProblem::kFewerThanThreeDistinct:
       return skip("face with fewer than three distinct vertices skipped; fix its vertex indices or remove it");
     case FaceProblem::kTooLarge:
-      return skip("face too large (its area overflows a double) skipped; scale the scene down");
+      return skip("face too large for double precision (a coordinate beyond 1e50, where the solver's products of "
+                  "lengths overflow) skipped; scale the scene down");
+    case FaceProblem::kTooSmall:
+      return skip("face too small for double precision (its size " + number_text(check.size) + " is below 1e-50, "
+                  "where the solver's products of lengths underflow) skipped; scale the scene up");
     case FaceProblem::kCollinear:
       return skip("face of zero area (all its vertices on one line) skipped; remove it or fix its vertices");
     case FaceProblem::kSelfIntersecting:

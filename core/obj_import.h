@@ -17,6 +17,9 @@
 //   - Kd outside [0, 1) (the solution would not converge), negative or non-finite Ke: InputError with
 //     the MTL file and line;
 //   - a face with fewer than three distinct vertices, or of zero area: skipped with a warning;
+//   - a face out of the range of scales the solver's doubles handle (a coordinate beyond 1e50, or a size below
+//     1e-50; core/face_check.h): skipped with a warning that says so (scale the scene; radiosity does not depend
+//     on its scale);
 //   - a non-planar face (a vertex farther than 1e-6 of the face's diagonal from its Newell plane): split
 //     into triangles by ear clipping, with a warning.
 // Warnings are collected in Scene::warnings.

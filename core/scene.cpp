@@ -118,8 +118,13 @@ void Scene::validate() const {
       case FaceProblem::kFewerThanThreeDistinct:
         throw InputError(where, f.source_line, face + " has fewer than three distinct vertices; fix or remove it");
       case FaceProblem::kTooLarge:
-        throw InputError(where, f.source_line, face + " is too large (its area overflows a double); scale the "
+        throw InputError(where, f.source_line, face + " is too large for double precision (a coordinate beyond 1e50, "
+                                                      "where the solver's products of lengths overflow); scale the "
                                                       "scene down");
+      case FaceProblem::kTooSmall:
+        throw InputError(where, f.source_line, face + " is too small for double precision (its size is below "
+                                                      "1e-50, where the solver's products of lengths underflow); "
+                                                      "scale the scene up");
       case FaceProblem::kCollinear:
         throw InputError(where, f.source_line, face + " has zero area (all its vertices on one line); remove it or "
                                                       "fix its vertices");

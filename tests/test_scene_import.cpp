@@ -204,10 +204,11 @@ TEST_F(SceneImport, import_emission_too_large_for_the_solver_is_error) {
   EXPECT_EQ(e.file(), mtl);
   EXPECT_EQ(e.line(), 3);
   EXPECT_NE(e.message().find("at most 1e100"), std::string::npos) << e.message();
-  // Within the bound per material, but over a vast area: the scene's emitted flux is refused.
+  // Within the bound per material, but over a vast area (both sides of a square 1e50 across, the largest
+  // coordinate accepted): the scene's emitted flux is refused.
   write("ok.mtl", "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1e100 1e100 1e100\n");
-  const std::string vast =
-      write("vast.obj", "mtllib ok.mtl\nv 0 0 0\nv 1e60 0 0\nv 1e60 1e60 0\nusemtl lamp\nf 1 2 3\n");
+  const std::string vast = write("vast.obj", "mtllib ok.mtl\nv 0 0 0\nv 1e50 0 0\nv 1e50 1e50 0\nv 0 1e50 0\n"
+                                             "usemtl lamp\nf 1 2 3 4\nf 4 3 2 1\n");
   EXPECT_NE(import_error(vast).message().find("emitted flux"), std::string::npos);
   // 1e100 over a unit triangle is fine.
   write("unit.obj", "mtllib ok.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n");
@@ -231,6 +232,55 @@ TEST_F(SceneImport, import_with_every_face_skipped_names_the_first) {
   EXPECT_EQ(scene.faces.size(), 1u);
   ASSERT_FALSE(scene.warnings.empty());
   EXPECT_NE(scene.warnings.front().find("vast_face.obj:6: face too large"), std::string::npos) << scene.warnings.front();
+}
+
+// A valid scene scaled far up or down is refused as too large or too small for the solver's doubles, not as a face
+// that intersects itself (squared lengths overflowed at 1e80) or lies on a line (they underflowed at 1e-100); the
+// scales between import alike.
+TEST_F(SceneImport, import_scales_beyond_double_precision_are_named_as_such) {
+  write("s.mtl", kSquareMtl);
+  const auto scaled = [&](double scale) {
+    std::ostringstream text;
+    text.precision(17);
+    text << "mtllib s.mtl\n";
+    for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0), Vec3(0.4, 0.4, 1),
+                          Vec3(0.6, 0.4, 1), Vec3(0.6, 0.6, 1), Vec3(0.4, 0.6, 1)})
+      text << "v " << p.x * scale << " " << p.y * scale << " " << p.z * scale << "\n";
+    text << "g floor\nusemtl grey\nf 1 2 3 4\ng lamp\nusemtl lamp\nf 8 7 6 5\n";  // lines 12 and 15
+    return write("scaled.obj", text.str());
+  };
+  for (const double scale : {1e-100, 1e-60}) {
+    const std::string message = import_error(scaled(scale)).message();
+    EXPECT_NE(message.find("all 2 faces were skipped; the first: " + (dir_ / "scaled.obj").string() +
+                           ":12: face too small for double precision"),
+              std::string::npos)
+        << scale << ": " << message;
+  }
+  for (const double scale : {1e60, 1e80}) {
+    const std::string message = import_error(scaled(scale)).message();
+    EXPECT_NE(message.find("scaled.obj:12: face too large for double precision"), std::string::npos)
+        << scale << ": " << message;
+  }
+  for (const double scale : {1e-45, 1e-12, 1.0, 1e6, 1e45}) {
+    const Scene scene = import_obj(scaled(scale));
+    EXPECT_EQ(scene.faces.size(), 2u) << scale;
+    EXPECT_EQ(scene.surfaces.size(), 2u) << scale;
+    EXPECT_TRUE(scene.warnings.empty()) << scale << ": " << scene.warnings.front();
+    EXPECT_NEAR(scene.total_area() / (scale * scale), 1.04, 1e-12) << scale;
+  }
+  // A scene built in code is held to the same range.
+  Scene vast;
+  vast.name = "vast";
+  const std::uint32_t m = vast.add_material({"lamp", Rgb(0.5), Rgb(1.0)});
+  vast.add_face(vast.add_group("floor"), m, {{0, 0, 0}, {1e80, 0, 0}, {1e80, 1e80, 0}});
+  vast.build_surfaces();
+  try {
+    vast.validate();
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("face 0 (group 'floor') is too large for double precision"), std::string::npos)
+        << e.message();
+  }
 }
 
 // ---- Warnings: skipped and split faces -----------------------------------------------------------------
