@@ -51,7 +51,8 @@ std::vector<std::string> split_tokens(const std::string& line) {
 // alone) read as line ends, and without a comment after a statement of numbers or file and material names
 // ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would read as part of it. Group and material
 // definitions keep a '#' ("o Chair #1", "newmtl Oak #2"); whole-line comments stay (the "# aarad" lines are
-// read from them); every line keeps its number.
+// read from them); every line keeps its number. `fo`, an older spelling of the face statement `f`, is read as `f`
+// (tinyobjloader passes over it, and its faces would vanish without a word).
 std::string clean_text(std::istream& in) {
   static const std::set<std::string> kCommentAfter{"v",  "vt", "vn", "vp", "f",  "l",  "p", "s",  "mtllib", "usemtl",
                                               "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr", "illum"};
@@ -64,7 +65,11 @@ std::string clean_text(std::istream& in) {
   std::string line;
   while (std::getline(lines, line)) {
     const auto first = line.find_first_not_of(" \t");
-    const auto key_end = first == std::string::npos ? first : line.find_first_of(" \t", first);
+    auto key_end = first == std::string::npos ? first : line.find_first_of(" \t", first);
+    if (first != std::string::npos && line.substr(first, key_end - first) == "fo") {
+      line.erase(first + 1, 1);
+      key_end = key_end == std::string::npos ? key_end : key_end - 1;
+    }
     if (first != std::string::npos && kCommentAfter.contains(line.substr(first, key_end - first))) {
       for (std::size_t i = first + 1; i < line.size(); ++i) {
         if (line[i] == '#' && (line[i - 1] == ' ' || line[i - 1] == '\t')) {

@@ -550,6 +550,22 @@ TEST_F(SceneImport, import_cr_line_ends_and_material_names_with_spaces) {
   EXPECT_NE(said, wood.warnings.end());
 }
 
+// `fo`, an older spelling of `f`, is a face like any other; tinyobjloader passes over it, and its faces vanished.
+TEST_F(SceneImport, import_fo_statements_are_read_as_faces) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("fo.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                          "v 0.4 0.4 1\nv 0.6 0.4 1\nv 0.6 0.6 1\nv 0.4 0.6 1\n"
+                                          "g floor\nusemtl grey\n  fo 1 2 3 4 # the floor\n"
+                                          "g lamp\nusemtl lamp\nf 8 7 6 5\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+  ASSERT_EQ(scene.faces.size(), 2u);
+  EXPECT_EQ(scene.groups[scene.faces[0].group].name, "floor");
+  EXPECT_EQ(scene.faces[0].source_line, 12);
+  EXPECT_EQ(scene.faces[0].vertices, (std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
+  EXPECT_EQ(scene.faces[1].source_line, 15);
+}
+
 // A statement OBJ does not have (a typo, or another format) is named with its first line and how many more.
 TEST_F(SceneImport, import_unknown_statements_warn_once_with_their_first_line) {
   const std::string obj = write("typo.obj", "v 0 0 0\nvv 1 0 0\nv 1 0 0\nvt 0 0\nv 1 1 0\nvv 2 2 2\ns off\nf 1 2 3\n");
