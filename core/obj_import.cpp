@@ -215,6 +215,39 @@ bool obj_statement(const std::string& key) {
   return key.starts_with('#') || kKnown.contains(key);
 }
 
+// Names the groups that an `o` or `g` line without a name starts: `unnamed_line_N`, N its line. tinyobjloader
+// passed over a bare `o` or `g` (its faces joined the group before) but started a group named after the file
+// at one followed by blanks. A warning names the line when faces follow it; exporters end objects with a bare
+// `g` (3ds Max), which starts no group since no face follows.
+std::string with_unnamed_groups_named(const std::string& text, const std::string& path,
+                                      std::vector<std::string>& warnings) {
+  std::string out;
+  out.reserve(text.size());
+  std::istringstream lines(text);
+  std::string line;
+  int number = 0;
+  std::optional<std::pair<int, std::string>> unnamed;  // (line, statement) of the last `o` or `g` if unnamed
+  while (std::getline(lines, line)) {
+    ++number;
+    const std::vector<std::string> t = split_tokens(line);
+    if (!t.empty() && (t[0] == "o" || t[0] == "g")) {
+      unnamed.reset();
+      if (t.size() == 1) {
+        line = t[0] + " unnamed_line_" + std::to_string(number);
+        unnamed.emplace(number, t[0]);
+      }
+    } else if (!t.empty() && t[0] == "f" && unnamed) {
+      warnings.push_back(InputError::format(path, unnamed->first, "'" + unnamed->second + "' without a name: its "
+                                                                  "faces form the group 'unnamed_line_" +
+                                                                  std::to_string(unnamed->first) + "'; name it"));
+      unnamed.reset();
+    }
+    out += line;
+    out += '\n';
+  }
+  return out;
+}
+
 ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std::string>& warnings) {
   ObjText text;
   std::string line;
@@ -476,12 +509,11 @@ Scene import_obj(const std::string& obj_path) {
   std::ifstream obj_file(obj_path);
   if (!obj_file)
     throw InputError(obj_path, 0, std::string("cannot read the file (") + std::strerror(errno) + "); check its permissions");
-  const std::string cleaned = clean_text(obj_file);
-  std::istringstream in(cleaned);
-
   Scene scene;
   scene.name = obj_path;
   std::vector<std::string>& warnings = scene.warnings;
+  const std::string cleaned = with_unnamed_groups_named(clean_text(obj_file), obj_path, warnings);
+  std::istringstream in(cleaned);
   const ObjText text = read_obj_text(obj_path, in, warnings);
 
   // The MTL libraries, read the same way tinyobjloader finds them: relative to the OBJ's folder.

@@ -1,7 +1,8 @@
 // OBJ/MTL import into the scene model, following the scene contract of ../shared/design.md:
 //   - each OBJ face is a polygon whose vertices run counter-clockwise seen from its lit side;
 //   - a face belongs to the group named by the nearest preceding `o` or `g` (faces before any belong to a
-//     group named after the file's stem);
+//     group named after the file's stem); an `o` or `g` without a name starts a group named `unnamed_line_N`,
+//     N its line, with a warning when faces follow it;
 //   - `Kd` is the reflectance rho per channel, in [0, 1); `Ke` the emitted radiosity, >= 0.
 // tinyobjloader parses the structure (groups, faces, materials); the importer reads the text once more
 // for what tinyobjloader does not keep: line numbers of vertices, faces and material statements, the vertex

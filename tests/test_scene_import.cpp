@@ -416,6 +416,32 @@ TEST_F(SceneImport, import_groups_follow_nearest_o_or_g) {
   EXPECT_EQ(scene.faces[scene.groups[1].faces[1]].source_line, 13);
 }
 
+// An `o` or `g` without a name starts a group as a named one does, named after its line, with a warning. A bare `o`
+// or `g` used to be passed over (its faces joined the group before) and one followed by blanks started a group
+// named after the file; a bare `g` that no face follows (3ds Max ends objects with one) starts nothing.
+TEST_F(SceneImport, import_o_or_g_without_a_name_starts_a_group_named_after_its_line) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("noname.obj",
+                                "mtllib s.mtl\nusemtl lamp\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\n"
+                                "o thing\nf 1 2 3\n"  // lines 8-9
+                                "o\nf 1 3 4\n"        // lines 10-11: bare
+                                "g  \t\nf 2 5 3\n"   // lines 12-13: blanks after it
+                                "g\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.groups.size(), 3u);
+  EXPECT_EQ(scene.groups[0].name, "thing");
+  EXPECT_EQ(scene.groups[1].name, "unnamed_line_10");
+  EXPECT_EQ(scene.groups[2].name, "unnamed_line_12");
+  for (const Group& g : scene.groups) EXPECT_EQ(g.faces.size(), 1u) << g.name;
+  EXPECT_EQ(scene.faces[scene.groups[1].faces[0]].source_line, 11);
+  ASSERT_EQ(scene.warnings.size(), 2u) << scene.warnings.front();
+  EXPECT_NE(scene.warnings[0].find("noname.obj:10: 'o' without a name: its faces form the group 'unnamed_line_10'"),
+            std::string::npos)
+      << scene.warnings[0];
+  EXPECT_NE(scene.warnings[1].find("noname.obj:12: 'g' without a name"), std::string::npos) << scene.warnings[1];
+}
+
 TEST_F(SceneImport, import_coplanar_faces_of_a_group_form_one_surface) {
   write("s.mtl", kSquareMtl);
   const std::string obj = write("planes.obj",
