@@ -149,6 +149,27 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
   }
 }
 
+// Integer options are decimal, leading zeros and all: CLI11 on its own reads "010" as octal 8 and refuses "08".
+TEST(Cli, IntegerOptionsWithLeadingZerosAreDecimal) {
+  const fs::path dir = work_dir();
+  ProgramRun r = aarad("solve cornell --resolution 010 --max-shots 010 --max-level 09 --shooter-samples 02 "
+                       "--threads 08 --width 010 --height 012 --json --quiet --out " + (dir / "zeros").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["resolution"], 10);
+  EXPECT_EQ(report["shots"], 10);
+  EXPECT_EQ(report["options"]["max_shots"], 10);
+  EXPECT_EQ(report["options"]["max_level"], 9);
+  EXPECT_EQ(report["options"]["shooter_samples"], 2);
+  // flat.png is 10 x 12: the PNG header holds the width and the height as big-endian words at bytes 16 and 20.
+  const std::string png = slurp(dir / "zeros" / "flat.png");
+  ASSERT_GE(png.size(), 24u);
+  EXPECT_EQ(png.substr(16, 8), std::string("\0\0\0\x0a\0\0\0\x0c", 8));
+  r = aarad("formfactors cornell --from light --resolution 010 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["resolution"], 10);
+}
+
 TEST(Cli, UnknownCommandIsNamed) {
   const ProgramRun r = aarad("bogus");
   EXPECT_EQ(r.code, 2);

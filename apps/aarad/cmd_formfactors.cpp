@@ -145,7 +145,7 @@ void add_formfactors_command(CLI::App& app) {
   cmd->add_option("--ff", options->method, "Form-factor back end: aa-hemicube, hemicube or analytic")
       ->capture_default_str();
   cmd->add_option("--resolution", options->resolution, "Hemicube pixels along the full top face [2, 8192]")
-      ->check(whole_number_in(2, 8192))
+      ->transform(whole_number_in(2, 8192))
       ->capture_default_str();
   cmd->add_flag("--json", options->json, "Print the report as one JSON object on stdout");
   cmd->callback([options] { run_formfactors(*options); });

@@ -242,13 +242,13 @@ void add_solve_command(CLI::App& app) {
   cmd->add_option("--ff", options->solver.backend, "Form-factor back end: aa-hemicube, hemicube, analytic")
       ->capture_default_str();
   cmd->add_option("--resolution", options->solver.resolution, "Hemicube pixels along the full top face [2, 8192]")
-      ->check(whole_number_in(2, 8192))
+      ->transform(whole_number_in(2, 8192))
       ->capture_default_str();
   cmd->add_option("--converge", options->solver.converge, "Stop when unshot flux < this x emitted flux")
       ->check(number_in(0.0, End::kClosed, 1.0, End::kClosed))
       ->capture_default_str();
   cmd->add_option("--max-shots", options->solver.max_shots, "Stop after this many shots")
-      ->check(whole_number_in(0))
+      ->transform(whole_number_in(0))
       ->capture_default_str();
   cmd->add_flag("--adaptive,!--no-adaptive", options->solver.adaptive,
                 "Adaptive substructuring on radiosity gradients: on by default (--adaptive), off with --no-adaptive");
@@ -263,7 +263,7 @@ void add_solve_command(CLI::App& app) {
   cmd->add_flag("--overshoot", options->solver.overshoot,
                 "Ambient overshooting: also shoot rho x the ambient unshot radiosity (fewer shots; default off)");
   cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
-      ->check(whole_number_in(1, 60));
+      ->transform(whole_number_in(1, 60));
   cmd->add_option("--min-area", options->min_area,
                   "Smallest element a split may create, scene units^2 (0: 1e-7 x the squared scene diagonal)")
       ->check(size);
@@ -275,7 +275,7 @@ void add_solve_command(CLI::App& app) {
   cmd->add_flag("--balance", options->balance, "Keep edge-neighbours within one level of each other");
   cmd->add_option("--shooter-samples", options->solver.shooter_samples,
                   "Gauss points per direction on the shooting patch (1: its centroid, as the paper)")
-      ->check(whole_number_in(1, 64))
+      ->transform(whole_number_in(1, 64))
       ->capture_default_str();
   cmd->add_option("--near-field", options->solver.near_field,
                   "Receivers within this many patch radii of the shooting patch, and smaller than it, get the shape "
@@ -283,7 +283,7 @@ void add_solve_command(CLI::App& app) {
       ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Worker threads (0: all cores) [0, 1024]")
-      ->check(whole_number_in(0, 1024))
+      ->transform(whole_number_in(0, 1024))
       ->capture_default_str();
   cmd->add_option("--out", options->out, "Output directory (default out/<scene name>)")
       ->check(CLI::Validator(
@@ -293,10 +293,10 @@ void add_solve_command(CLI::App& app) {
           },
           "DIR", "a directory name"));
   cmd->add_option("--width", options->width, "Image width in pixels")
-      ->check(whole_number_in(1, 16384))
+      ->transform(whole_number_in(1, 16384))
       ->capture_default_str();
   cmd->add_option("--height", options->height, "Image height in pixels")
-      ->check(whole_number_in(1, 16384))
+      ->transform(whole_number_in(1, 16384))
       ->capture_default_str();
   cmd->add_flag("--json", options->json, "Print the report as one JSON object on stdout, nothing else there");
   cmd->add_flag("--quiet", options->quiet, "No progress or summary (warnings and errors still go to stderr)");

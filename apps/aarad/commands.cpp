@@ -77,8 +77,13 @@ CLI::Validator whole_number_in(long long low, long long high) {
         const bool whole = sign < text.size() && text.find_first_not_of("0123456789", sign) == std::string::npos;
         errno = 0;
         const long long value = whole ? std::strtoll(text.c_str(), nullptr, 10) : 0;
-        if (whole && errno == 0 && value >= low && value <= high) return {};
-        return "Value " + text + " must be a whole number " + wanted;
+        if (!whole || errno != 0 || value < low || value > high) {
+          return "Value " + text + " must be a whole number " + wanted;
+        }
+        // CLI11 converts integers with base 0: "010" would be octal 8 and "08" no number at all. The docs promise
+        // decimal, so the option receives the value in decimal without leading zeros.
+        text = std::to_string(value);
+        return {};
       },
       wanted);
 }

@@ -24,9 +24,11 @@ void add_solve_command(CLI::App& app);
 // each end included or not. NaN is refused, and the message shows the interval as written in the docs.
 enum class End { kOpen, kClosed };
 CLI::Validator number_in(double low, End low_end, double high, End high_end);
-// A CLI11 check for integer options: the value is a whole number (decimal digits, optional sign) from `low` to
+// A CLI11 transform for integer options: the value is a whole number (decimal digits, optional sign) from `low` to
 // `high`, both included; `high` = kNoLimit means no upper bound. "1.5", "1e3" or "12x" are refused with a message
-// that says a whole number is wanted, instead of CLI11's "not in range" or "could not convert".
+// that says a whole number is wanted, instead of CLI11's "not in range" or "could not convert". Leading zeros are
+// decimal ("010" is 10): the value is passed on rewritten without them, which CLI11 would otherwise read as octal.
+// Attach it with Option::transform(), not check(): check() hands the validator a copy and drops the rewrite.
 inline constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 CLI::Validator whole_number_in(long long low, long long high = kNoLimit);
 
