@@ -35,12 +35,14 @@ fs::path work_dir() {
   return dir;
 }
 
-// Runs `aarad ARGS` through the shell with stdout and stderr captured in files.
-ProgramRun aarad(const std::string& args) {
+// Runs `aarad ARGS` through the shell with stdout and stderr captured in files, or stdout sent to `stdout_path`
+// (then ProgramRun::out is empty).
+ProgramRun aarad(const std::string& args, const std::string& stdout_path = "") {
   const fs::path dir = work_dir();
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = std::string(AARAD_BINARY_DIR "/apps/aarad/aarad ") + args + " >" + out.string() +
-                              " 2>" + err.string();
+  fs::remove(out);
+  const std::string command = std::string(AARAD_BINARY_DIR "/apps/aarad/aarad ") + args + " >" +
+                              (stdout_path.empty() ? out.string() : stdout_path) + " 2>" + err.string();
   const int status = std::system(command.c_str());
   ProgramRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -168,6 +170,26 @@ TEST(Cli, IntegerOptionsWithLeadingZerosAreDecimal) {
   r = aarad("formfactors cornell --from light --resolution 010 --json");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["resolution"], 10);
+}
+
+// Output on stdout that cannot be written (a full disk) is an error, exit 1 with a message, not exit 0: stdout is
+// buffered and only fails when flushed, after the command.
+TEST(Cli, StdoutThatCannotBeWrittenExitsOneAndSaysSo) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string out = (work_dir() / "full").string();
+  for (const std::string& command :
+       {"solve cornell --json --quiet --max-shots 2 --width 8 --height 8 --out " + out,
+        "solve cornell --max-shots 2 --width 8 --height 8 --out " + out, std::string("inspect cornell --json"),
+        std::string("inspect cornell"), std::string("formfactors cornell --from light --json"),
+        std::string("formfactors cornell --from light"), std::string("solve --help")}) {
+    const ProgramRun r = aarad(command, "/dev/full");
+    EXPECT_EQ(r.code, 1) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("aarad: error: cannot write to standard output"), std::string::npos)
+        << command << ": " << r.err;
+  }
+  // Nothing on stdout: nothing lost.
+  const ProgramRun r = aarad("solve cornell --quiet --max-shots 2 --width 8 --height 8 --out " + out, "/dev/full");
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 TEST(Cli, UnknownCommandIsNamed) {

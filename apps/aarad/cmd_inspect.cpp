@@ -165,10 +165,9 @@ void add_inspect_command(CLI::App& app) {
     const Scene scene = load_scene(options->scene);
     const bool builtin = is_builtin(options->scene);
     if (options->json) {
-      std::cout << refine::json_text(report(scene, builtin), 2) << std::endl;
+      std::cout << refine::json_text(report(scene, builtin), 2) << '\n';
     } else {
       print_table(scene, builtin);
-      std::fflush(stdout);
     }
     set_exit_code(0);
   });

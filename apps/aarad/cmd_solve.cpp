@@ -1,7 +1,7 @@
 // `aarad solve [SCENE]`: progressive-refinement radiosity with adaptive substructuring (refine/solver.h),
 // progress on stderr, Ctrl-C to stop after the current shot, and the output files of ../shared/design.md.
-// Exit codes (docs/solver.md): 0 converged or stopped at --max-shots, 1 bad input, 2 usage, 3 internal error
-// (main.cpp), 130 interrupted.
+// Exit codes (docs/solver.md): 0 converged or stopped at --max-shots, 1 bad input or output (stdout in main.cpp),
+// 2 usage, 3 internal error (main.cpp), 130 interrupted.
 #include "apps/aarad/commands.h"
 
 #include "core/builtin_scenes.h"
@@ -206,7 +206,10 @@ void run_solve(SolveCommandOptions options) {
     const nlohmann::json report = refine::make_report(solver, violations, {.total = total, .output = files.seconds});
     refine::write_report(report, out / "report.json");
 
-    if (options.json) std::cout << refine::json_text(report) << '\n' << std::flush;
+    if (options.json) {
+      std::cout << refine::json_text(report) << '\n';
+      flush_stdout();  // before the summary on stderr; main() reports a failure
+    }
     if (!options.quiet) {
       std::FILE* summary = options.json ? stderr : stdout;
       const char* state = solver.converged()     ? "converged"
@@ -223,7 +226,6 @@ void run_solve(SolveCommandOptions options) {
       std::fprintf(summary,
                    "aarad: wrote %s/: mesh.ply flat.png smooth.png mesh.png radiosity.exr report.json\n",
                    out.string().c_str());
-      std::fflush(summary);
     }
   }
   set_exit_code(solver.interrupted() ? 130 : 0);

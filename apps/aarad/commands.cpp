@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -103,5 +105,18 @@ void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFac
 
 void set_exit_code(int code) { g_exit_code = code; }
 int exit_code() { return g_exit_code; }
+
+std::string flush_stdout() {
+  static std::string failure;  // the first, with its reason: a failed flush empties the buffer and the next succeeds
+  if (!failure.empty()) return failure;
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int reason = errno;
+  // std::cout is synchronised with stdio (the default): its text went to stdout's buffer, or failed there.
+  if (flushed && !std::ferror(stdout) && !std::cout.bad()) return {};
+  // A write that failed when a full buffer went out sets the error flag, but its errno is gone.
+  failure = !flushed && reason != 0 ? std::strerror(reason) : "part of the output was lost";
+  return failure;
+}
 
 }  // namespace aarad::app

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <limits>
+#include <string>
 
 namespace aarad {
 class Scene;
@@ -38,5 +39,10 @@ void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFac
 
 void set_exit_code(int code);
 int exit_code();
+
+// Flushes stdout. Output there is buffered, so a full disk (`> /dev/full`) or a descriptor that cannot be written
+// shows only when it is flushed: returns why stdout lost output (the first failure, also one of an earlier call),
+// empty when all of it went out. main() calls it after every command and then exits 1 (docs/solver.md), not 0.
+std::string flush_stdout();
 
 }  // namespace aarad::app

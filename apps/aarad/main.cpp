@@ -9,7 +9,10 @@
 #include <exception>
 #include <string>
 
-int main(int argc, char** argv) {
+namespace {
+
+// Parses the command line and runs the command; returns the exit code of docs/solver.md.
+int run(int argc, char** argv) {
   CLI::App app{"aarad: progressive-refinement radiosity with anti-aliased hemicubes"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "aarad 0.1.0");
@@ -43,4 +46,18 @@ int main(int argc, char** argv) {
     return 3;
   }
   return aarad::app::exit_code();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int code = run(argc, argv);
+  // Output on stdout (a report, --help) that did not get out is an error (exit 1), also after a Ctrl-C (130); an
+  // error's own exit code stays.
+  const std::string lost = aarad::app::flush_stdout();
+  if (!lost.empty()) {
+    std::fprintf(stderr, "aarad: error: cannot write to standard output: %s\n", lost.c_str());
+    if (code == 0 || code == 130) return 1;
+  }
+  return code;
 }
