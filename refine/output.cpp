@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 #include <unistd.h>
@@ -41,14 +42,35 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
 void check_output_directory(const std::filesystem::path& directory) {
   namespace fs = std::filesystem;
   std::error_code error;
-  fs::path existing = fs::absolute(directory, error);
+  const fs::path absolute = fs::absolute(directory, error);
   if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
-  while (!fs::exists(existing, error) && existing.has_parent_path() && existing != existing.parent_path())
+  fs::path existing = absolute;
+  while (!fs::exists(existing, error)) {
+    // A symbolic link that leads nowhere does not exist, yet create_directories cannot make a directory in its
+    // place ("File exists").
+    if (fs::is_symlink(fs::symlink_status(existing, error))) {
+      throw Error("cannot create directory " + directory.string() + ": " + existing.string() +
+                  " is a symbolic link to " + fs::read_symlink(existing, error).string() +
+                  ", which does not exist; remove the link or create what it points to");
+    }
+    if (!existing.has_parent_path() || existing == existing.parent_path()) break;
     existing = existing.parent_path();
+  }
   if (!fs::is_directory(existing, error))
     throw Error("cannot create directory " + directory.string() + ": " + existing.string() + " is not a directory");
   if (::access(existing.c_str(), W_OK | X_OK) != 0)
     throw Error("cannot write files in " + existing.string() + ": " + std::strerror(errno));
+  if (existing != absolute) return;  // the directory is new: nothing in it yet
+  // Every file is renamed into place: rename(2) cannot replace a directory, and a FIFO or a device is not a file a
+  // solve should replace. A regular file, or a symbolic link (replaced, not followed), is fine.
+  for (const std::string_view name : kSolutionFileNames) {
+    const fs::path path = directory / name;
+    const fs::file_status status = fs::symlink_status(path, error);
+    if (!fs::exists(status) || fs::is_regular_file(status) || fs::is_symlink(status)) continue;
+    throw Error("cannot write " + path.string() + ": it exists and is " +
+                (fs::is_directory(status) ? "a directory" : "not a regular file") +
+                "; move it away or write the solution elsewhere");
+  }
 }
 
 OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,

@@ -7,8 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace aarad::refine {
@@ -28,9 +30,15 @@ struct OutputResult {
 // max(r, g, b) to 1 (docs/solver.md).
 ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed);
 
+// The files of a solve in `directory`, in the order they are written: write_solution_files, then write_report.
+inline constexpr std::array<std::string_view, 6> kSolutionFileNames = {
+    "mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr", "report.json"};
+
 // Checks, without creating anything, that write_solution_files could create `directory` and write into it: the
-// directory, or the nearest ancestor that exists, is a directory this process may write into. A solve calls it
-// before it starts, so that it does not end in an error about its output. Throws aarad::Error.
+// directory, or the nearest ancestor that exists, is a directory this process may write into, no part of the
+// path is a symbolic link to nothing, and none of kSolutionFileNames in it is a directory or another file that
+// is neither regular nor a symbolic link (a FIFO, a device). A solve calls it before it starts, so that it does
+// not end in an error about its output. Throws aarad::Error.
 void check_output_directory(const std::filesystem::path& directory);
 
 // Writes mesh.ply, flat.png, smooth.png, mesh.png and radiosity.exr into `directory` (created when missing),

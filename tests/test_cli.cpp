@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <utility>
@@ -220,6 +221,55 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   EXPECT_NE(r.err.find("nothing in the scene emits light"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("missing.mtl"), std::string::npos) << r.err;  // the warning that explains it
   EXPECT_FALSE(fs::exists(dir / "dark"));
+}
+
+// The output directory is checked before the first shot (docs/solver.md), also where a look at what exists is not
+// enough: a symbolic link to nothing is not a directory to create, and an output file's name held by a directory
+// or a FIFO cannot take the file. Before, both solved and then failed.
+TEST(Cli, SolveRefusesADanglingLinkOrAnOutputNameThatIsNotAFileBeforeSolving) {
+  const fs::path dir = work_dir();
+  const std::string fast = "solve cornell --max-shots 2 --width 8 --height 8 --out ";
+  const fs::path dangling = dir / "dangling";
+  fs::remove(dangling);
+  fs::create_symlink(dir / "nonexistent" / "deeper", dangling);
+  for (const fs::path& out : {dangling, dangling / "sub"}) {
+    const ProgramRun r = aarad(fast + out.string());
+    EXPECT_EQ(r.code, 1) << out << ": " << r.err;
+    EXPECT_NE(r.err.find(dangling.string() + " is a symbolic link to " + (dir / "nonexistent" / "deeper").string() +
+                         ", which does not exist"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("shot"), std::string::npos) << r.err;  // refused before the first shot
+  }
+  EXPECT_FALSE(fs::exists(dir / "nonexistent"));
+
+  const fs::path taken = dir / "taken";
+  fs::remove_all(taken);
+  fs::create_directories(taken / "report.json");
+  ProgramRun r = aarad(fast + taken.string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("cannot write " + (taken / "report.json").string() + ": it exists and is a directory"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("shot"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(taken / "mesh.ply"));  // nothing written
+
+  fs::remove_all(taken);
+  fs::create_directories(taken);
+  ASSERT_EQ(::mkfifo((taken / "flat.png").c_str(), 0600), 0);
+  r = aarad(fast + taken.string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("flat.png: it exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(taken / "mesh.ply"));
+
+  // A symbolic link in place of a file is replaced (not followed), as a regular file is.
+  fs::remove_all(taken);
+  fs::create_directories(taken);
+  fs::create_symlink(dir / "nowhere.json", taken / "report.json");
+  r = aarad(fast + taken.string() + " --quiet");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(taken / "report.json")));
+  EXPECT_FALSE(fs::exists(dir / "nowhere.json"));
 }
 
 // A lamp over a floor: turned towards the floor, most of its light still leaves the open scene, and the summary
