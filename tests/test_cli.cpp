@@ -478,6 +478,24 @@ TEST(Cli, FormfactorsFromTheCornellFloorPointToTheLight) {
   EXPECT_NEAR(factor_to(aa, "light"), published, 0.005 * published);
 }
 
+// Faces of one group in one plane with two materials are two physical surfaces but one planar polygon: the form
+// factors from it are those of the same faces with one material (before, "its faces lie in 2 planes").
+TEST(Cli, FormfactorsFromAPlanarGroupOfTwoMaterials) {
+  write_file("two_materials.mtl", "newmtl white\nKd 0.7 0.7 0.7\nnewmtl red\nKd 0.6 0.1 0.1\n");
+  const std::string vertices = "mtllib two_materials.mtl\nv 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 0 1\nv 1 0 1\nv 2 0 1\n"
+                               "v 0 1 0\nv 2 1 0\nv 2 1 1\nv 0 1 1\n";
+  const std::string lid = "o lid\nusemtl white\nf 7 8 9 10\n";
+  const fs::path two =
+      write_file("floor_two.obj", vertices + "o floor\nusemtl white\nf 1 4 5 2\nusemtl red\nf 2 5 6 3\n" + lid);
+  const fs::path one = write_file("floor_one.obj", vertices + "o floor\nusemtl white\nf 1 4 5 2\nf 2 5 6 3\n" + lid);
+  const nlohmann::json from_two = formfactors_json(two, "floor", "--ff analytic");
+  const nlohmann::json from_one = formfactors_json(one, "floor", "--ff analytic");
+  EXPECT_EQ(from_two["point"], nlohmann::json::parse("[1.0, 0.0, 0.5]"));
+  EXPECT_EQ(from_two["normal"], nlohmann::json::parse("[0.0, 1.0, 0.0]"));
+  EXPECT_GT(factor_to(from_two, "lid"), 0.3);
+  EXPECT_EQ(factor_to(from_two, "lid"), factor_to(from_one, "lid"));
+}
+
 TEST(Cli, FormfactorsFromABadGroupIsAnError) {
   // Issue 3: a GROUP that is missing, not one planar polygon, or of zero area is a clear error (exit 1, a bad
   // scene, docs/solver.md), with a message naming the problem.

@@ -30,14 +30,20 @@ struct FormFactorsOptions {
   bool json = false;
 };
 
-// The shooting point: the area centroid of the group's faces, which must all lie in one physical surface.
+// The shooting point: the area centroid of the group's faces, which must all lie in one plane.
 formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_index) {
-  const Group& group = scene.groups[group_index];
+  // Physical surfaces are split by material as well as by plane, and form factors do not depend on material:
+  // with one material for the group's faces, the import's own rule (Scene::build_surfaces) splits them by plane
+  // only.
+  Scene one_material = scene;
+  for (const std::uint32_t f : scene.groups[group_index].faces) one_material.faces[f].material = 0;
+  one_material.build_surfaces();
+  const Group& group = one_material.groups[group_index];
   if (group.surfaces.size() != 1) {
     throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in " +
                 std::to_string(group.surfaces.size()) + " planes; pick a planar group");
   }
-  const Surface& surface = scene.surfaces[group.surfaces.front()];
+  const Surface& surface = one_material.surfaces[group.surfaces.front()];
   Vec3 weighted(0.0);
   double total = 0.0;
   for (std::uint32_t f : surface.faces) {
