@@ -78,6 +78,15 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   namespace fs = std::filesystem;
   const auto start = std::chrono::steady_clock::now();
   if (options.width < 1 || options.height < 1) throw Error("image size must be at least 1 x 1");
+  OutputResult result;
+  // Before each file: false when the caller asks to stop, and then the result says how far it got.
+  const auto next_file = [&] {
+    if (!options.keep_writing || options.keep_writing()) return true;
+    result.complete = false;
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return false;
+  };
+  if (!next_file()) return result;
   std::error_code error;
   fs::create_directories(directory, error);
   if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
@@ -85,7 +94,6 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   const mesh::Hierarchy& hierarchy = solver.hierarchy();
   const std::vector<Rgb> radiosity = solver.radiosity();
   const std::vector<Rgb> displayed = solver.displayed_radiosity();
-  OutputResult result;
   result.tone_map = solution_tone_map(solver, displayed);
   const ToneMap map = result.tone_map;
 
@@ -97,6 +105,7 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   const Scene& scene = solver.scene();
   const double aspect = static_cast<double>(options.width) / options.height;
   const Camera camera = scene.camera ? *scene.camera : scene.fitted_camera(aspect);
+  if (!next_file()) return result;
   const mesh::DisplayMesh display = mesh::build_display_mesh(hierarchy, displayed);
 
   const Rendering flat = render(display, displayed, camera, options.width, options.height, Shading::kFlat);
@@ -104,15 +113,18 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   write_png(flat_display, directory / "flat.png");
   result.files.push_back(directory / "flat.png");
 
+  if (!next_file()) return result;
   const Rendering smooth = render(display, displayed, camera, options.width, options.height, Shading::kSmooth);
   write_png(tone_map(smooth.image, map), directory / "smooth.png");
   result.files.push_back(directory / "smooth.png");
 
+  if (!next_file()) return result;
   Image8 with_edges = flat_display;
   draw_leaf_edges(with_edges, flat.leaf);
   write_png(with_edges, directory / "mesh.png");
   result.files.push_back(directory / "mesh.png");
 
+  if (!next_file()) return result;
   write_exr(flat.image, directory / "radiosity.exr");
   result.files.push_back(directory / "radiosity.exr");
 

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,11 +19,16 @@ namespace aarad::refine {
 struct OutputOptions {
   int width = 512;
   int height = 512;
+  // Asked before each file (none: write them all). When it returns false, write_solution_files writes no further
+  // file and returns with OutputResult::complete false: `aarad solve` stops there after a second Ctrl-C, between
+  // two files, so that every file is whole or absent and no temporary stays behind.
+  std::function<bool()> keep_writing = nullptr;
 };
 
 struct OutputResult {
   ToneMap tone_map;                          // the exposure used for the PNGs and the PLY's vertex colours
   std::vector<std::filesystem::path> files;  // in the order written
+  bool complete = true;                      // false when keep_writing stopped it before the last file
   double seconds = 0.0;
 };
 
@@ -42,7 +48,8 @@ inline constexpr std::array<std::string_view, 6> kSolutionFileNames = {
 void check_output_directory(const std::filesystem::path& directory);
 
 // Writes mesh.ply, flat.png, smooth.png, mesh.png and radiosity.exr into `directory` (created when missing),
-// from the scene's camera or, without one, Scene::fitted_camera. Throws aarad::Error naming the file on failure.
+// from the scene's camera or, without one, Scene::fitted_camera, in that order, each after asking
+// options.keep_writing. Throws aarad::Error naming the file on failure.
 OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,
                                   const OutputOptions& options = {});
 

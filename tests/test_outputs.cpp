@@ -98,6 +98,26 @@ TEST_F(OutputsTest, EveryFileAndNoTemporaryFile) {
                                           "report.json"}));
 }
 
+// keep_writing is asked before each file: `aarad solve` stops there after a second Ctrl-C. Answering no before the
+// third file leaves the first two, whole, and no temporary file.
+TEST_F(OutputsTest, KeepWritingStopsBetweenFiles) {
+  const fs::path directory = directory_.parent_path() / (directory_.filename().string() + "-stopped");
+  fs::remove_all(directory);
+  int asked = 0;
+  const OutputResult result = write_solution_files(
+      *solver_, directory, {.width = 16, .height = 12, .keep_writing = [&] { return ++asked <= 2; }});
+  EXPECT_FALSE(result.complete);
+  EXPECT_EQ(asked, 3);
+  EXPECT_EQ(result.files, (std::vector<fs::path>{directory / "mesh.ply", directory / "flat.png"}));
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(directory)) names.insert(entry.path().filename().string());
+  EXPECT_EQ(names, (std::set<std::string>{"mesh.ply", "flat.png"}));
+  EXPECT_EQ(read_image(directory / "flat.png").width, 16);
+  // Without an answer, every file.
+  EXPECT_TRUE(write_solution_files(*solver_, directory, {.width = 16, .height = 12}).complete);
+  fs::remove_all(directory);
+}
+
 TEST_F(OutputsTest, PngsReadBackWithTheRequestedSize) {
   for (const char* name : {"flat.png", "smooth.png", "mesh.png"}) {
     const ReadImage image = read_image(directory_ / name);

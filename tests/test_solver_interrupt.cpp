@@ -107,4 +107,139 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
   EXPECT_GT(report["elements"].get<long long>(), 0);
 }
 
+// `aarad solve cornell` writing 1024 x 1024 images (about 0.3 s after mesh.ply) into `out`, as a child process
+// whose stderr the test reads through a pipe (stdout goes to /dev/null).
+struct WritingChild {
+  pid_t pid = -1;
+  FILE* err = nullptr;
+  std::string everything;  // stderr as read so far
+
+  explicit WritingChild(const fs::path& out) {
+    const std::string binary = AARAD_BINARY_DIR "/apps/aarad/aarad";
+    fs::remove_all(out);
+    int stderr_pipe[2];
+    if (pipe(stderr_pipe) != 0) return;
+    pid = fork();
+    if (pid == 0) {
+      dup2(stderr_pipe[1], STDERR_FILENO);
+      close(stderr_pipe[0]);
+      close(stderr_pipe[1]);
+      if (std::freopen("/dev/null", "w", stdout) == nullptr) _exit(126);
+      execl(binary.c_str(), binary.c_str(), "solve", "cornell", "--max-shots", "3", "--width", "1024", "--height",
+            "1024", "--out", out.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    close(stderr_pipe[1]);
+    err = fdopen(stderr_pipe[0], "r");
+  }
+
+  // Waits until `file` exists (true), or the child has ended or a minute has passed (false).
+  bool wait_for(const fs::path& file) const {
+    for (int ms = 0; ms < 60000; ++ms) {
+      if (fs::exists(file)) return true;
+      siginfo_t info{};
+      // Ended (left to be waited for by finish()), or an error.
+      if (waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) != 0 || info.si_pid != 0) {
+        return false;
+      }
+      usleep(1000);
+    }
+    return false;
+  }
+
+  // Reads stderr until a line starts with `prefix` (true) or it ends (false).
+  bool read_until(const std::string& prefix) {
+    char line[4096];
+    while (std::fgets(line, sizeof line, err) != nullptr) {
+      everything += line;
+      if (std::string(line).rfind(prefix, 0) == 0) return true;
+    }
+    return false;
+  }
+
+  // Reads stderr to its end and returns the child's status.
+  int finish() {
+    read_until("\n");  // no line starts with a newline: to the end
+    std::fclose(err);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return status;
+  }
+};
+
+std::set<std::string> names_in(const fs::path& directory) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(directory)) names.insert(entry.path().filename().string());
+  return names;
+}
+
+void expect_whole_image(const fs::path& path, int size) {
+  auto input = OIIO::ImageInput::open(path.string());
+  ASSERT_TRUE(input) << path << ": " << OIIO::geterror();
+  const OIIO::ImageSpec& spec = input->spec();
+  EXPECT_EQ(spec.width, size) << path;
+  EXPECT_EQ(spec.height, size) << path;
+  std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  EXPECT_TRUE(input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+      << path << ": " << input->geterror();
+  input->close();
+}
+
+// A Ctrl-C once the solve is over (the solve stopped at --max-shots, mesh.ply is written, the images are being
+// rendered and written): every file is written whole, the report describes the solve, and the exit code is 130.
+// Before, the Ctrl-C was ignored: exit 0.
+TEST(SolverInterrupt, SigintWhileWritingLetsEveryFileBeWrittenAndExits130) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("writing-" + std::to_string(getpid()));
+  WritingChild child(out);
+  ASSERT_GT(child.pid, 0);
+  ASSERT_NE(child.err, nullptr);
+  ASSERT_TRUE(child.wait_for(out / "mesh.ply")) << "mesh.ply never appeared";
+  ASSERT_EQ(kill(child.pid, SIGINT), 0);
+  const int status = child.finish();
+  ASSERT_TRUE(WIFEXITED(status)) << child.everything;
+  EXPECT_EQ(WEXITSTATUS(status), 130) << child.everything;
+  EXPECT_NE(child.everything.find("aarad: Ctrl-C: writing the files to the end"), std::string::npos)
+      << child.everything;
+  EXPECT_EQ(names_in(out), (std::set<std::string>{"mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr",
+                                                  "report.json"}));
+  for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
+    expect_whole_image(out / image, 1024);
+  }
+  std::ifstream in(out / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["interrupted"], false);  // the solve ran its 3 shots
+  EXPECT_EQ(report["shots"], 3);
+  fs::remove_all(out);
+}
+
+// A second Ctrl-C while the files are written stops after the file being written: no temporary file stays behind
+// (before, the second Ctrl-C killed the program in the middle of a file and left `.flat.tmpPID-K.png`), what was
+// written is whole, report.json (written last) is not, and the exit code is 130.
+TEST(SolverInterrupt, ASecondSigintWhileWritingStopsAfterTheFileBeingWrittenAndLeavesNoTemporary) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("stopped-" + std::to_string(getpid()));
+  WritingChild child(out);
+  ASSERT_GT(child.pid, 0);
+  ASSERT_NE(child.err, nullptr);
+  ASSERT_TRUE(child.wait_for(out / "mesh.ply")) << "mesh.ply never appeared";
+  ASSERT_EQ(kill(child.pid, SIGINT), 0);
+  // The second once the first has been handled (two pending SIGINTs would be one).
+  if (child.read_until("aarad: Ctrl-C:")) {
+    ASSERT_EQ(kill(child.pid, SIGINT), 0);
+  }
+  const int status = child.finish();
+  ASSERT_TRUE(WIFEXITED(status)) << child.everything;
+  EXPECT_EQ(WEXITSTATUS(status), 130) << child.everything;
+  EXPECT_NE(child.everything.find("aarad: Ctrl-C: stopping after the file being written"), std::string::npos)
+      << child.everything;
+  EXPECT_NE(child.everything.find("aarad: stopped by Ctrl-C; wrote mesh.ply"), std::string::npos) << child.everything;
+  const std::set<std::string> names = names_in(out);
+  for (const std::string& name : names) EXPECT_NE(name[0], '.') << "a temporary file: " << name;
+  EXPECT_EQ(names.count("report.json"), 0u);
+  EXPECT_EQ(names.count("mesh.ply"), 1u);
+  for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
+    if (names.count(image) != 0) expect_whole_image(out / image, 1024);
+  }
+  fs::remove_all(out);
+}
+
 }  // namespace

@@ -33,25 +33,48 @@
 namespace aarad::app {
 namespace {
 
-std::atomic<bool> g_interrupt_requested{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the SIGINT handler needs a lock-free flag");
+// Ctrl-C (docs/solver.md). During the solve the first stops it after the current shot, and the second ends the
+// program at once (SA_RESETHAND: the default action), as nothing is being written yet. Once the solve is over,
+// files are being written, and a Ctrl-C must not end the program in the middle of one (its temporary would stay
+// behind): the first lets every file be written, the next stops after the file being written. Any Ctrl-C makes the
+// exit code 130.
+std::atomic<int> g_interrupts{0};
+std::atomic<bool> g_quiet{false};
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free,
+              "the SIGINT handlers need lock-free atomics");
 
-extern "C" void on_sigint(int) { g_interrupt_requested.store(true); }
+extern "C" void on_sigint_while_solving(int) { g_interrupts.fetch_add(1); }
 
-// Installs the SIGINT handler for its lifetime. SA_RESETHAND: a second Ctrl-C ends the program at once.
-class InterruptGuard {
- public:
-  InterruptGuard() {
-    g_interrupt_requested.store(false);
-    struct sigaction action {};
-    action.sa_handler = on_sigint;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESETHAND;
-    sigaction(SIGINT, &action, &previous_);
+extern "C" void on_sigint_while_writing(int) {
+  const int interrupts = g_interrupts.fetch_add(1) + 1;
+  if (g_quiet.load()) return;
+  // write(2) is async-signal-safe, stdio is not.
+  static constexpr char kFirst[] =
+      "aarad: Ctrl-C: writing the files to the end; Ctrl-C again to stop after the file being written\n";
+  static constexpr char kAgain[] = "aarad: Ctrl-C: stopping after the file being written\n";
+  if (interrupts == 1) {
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kFirst, sizeof kFirst - 1);
+  } else {
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kAgain, sizeof kAgain - 1);
   }
-  ~InterruptGuard() { sigaction(SIGINT, &previous_, nullptr); }
-  InterruptGuard(const InterruptGuard&) = delete;
-  InterruptGuard& operator=(const InterruptGuard&) = delete;
+}
+
+// Handles SIGINT with the handler given last to handle(), and restores the previous handling when it ends.
+class SigintGuard {
+ public:
+  SigintGuard() { sigaction(SIGINT, nullptr, &previous_); }
+  ~SigintGuard() { sigaction(SIGINT, &previous_, nullptr); }
+  SigintGuard(const SigintGuard&) = delete;
+  SigintGuard& operator=(const SigintGuard&) = delete;
+
+  // SA_RESTART: a write to a pipe that a Ctrl-C interrupts goes on instead of failing with EINTR.
+  void handle(void (*handler)(int), int flags) {
+    struct sigaction action {};
+    action.sa_handler = handler;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = flags | SA_RESTART;
+    sigaction(SIGINT, &action, nullptr);
+  }
 
  private:
   struct sigaction previous_ {};
@@ -167,14 +190,22 @@ void run_solve(SolveCommandOptions options) {
 
   ProgressPrinter printer(show_progress, solver_options.converge);
   {
-    InterruptGuard guard;
+    g_interrupts.store(0);
+    g_quiet.store(options.quiet);
+    SigintGuard sigint;
+    sigint.handle(on_sigint_while_solving, SA_RESETHAND);
     solver.run([&](const refine::Progress& progress) {
       printer.update(progress);
-      return !g_interrupt_requested.load();
+      return g_interrupts.load() == 0;
     });
+    // From here on, files are written: no Ctrl-C ends the program in the middle of one.
+    sigint.handle(on_sigint_while_writing, 0);
+    const auto keep_writing = [] { return g_interrupts.load() < 2; };
     printer.finish();
     if (solver.interrupted() && !options.quiet) {
-      std::fprintf(stderr, "aarad: interrupted after %lld shots; writing the solution so far\n",
+      std::fprintf(stderr,
+                   "aarad: interrupted after %lld shots; writing the solution so far (Ctrl-C again to stop after "
+                   "the file being written)\n",
                    static_cast<long long>(solver.shots()));
     }
 
@@ -200,8 +231,20 @@ void run_solve(SolveCommandOptions options) {
       std::fprintf(stderr, "aarad: warning: and %zu more invariant violations, listed in report.json\n",
                    violations.size() - kShown);
     }
-    const refine::OutputResult files =
-        refine::write_solution_files(solver, out, {.width = options.width, .height = options.height});
+    const refine::OutputResult files = refine::write_solution_files(
+        solver, out, {.width = options.width, .height = options.height, .keep_writing = keep_writing});
+    if (!files.complete || !keep_writing()) {
+      // A second Ctrl-C: what was written is whole, the rest (report.json last) is not written.
+      if (!options.quiet) {
+        std::string written;
+        for (const std::filesystem::path& file : files.files) written += " " + file.filename().string();
+        std::fprintf(stderr, "aarad: stopped by Ctrl-C; %s\n",
+                     written.empty() ? "no file written"
+                                     : ("wrote" + written + " in " + out.string() + "/, not the rest").c_str());
+      }
+      set_exit_code(130);
+      return;
+    }
     const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const nlohmann::json report = refine::make_report(solver, violations, {.total = total, .output = files.seconds});
     refine::write_report(report, out / "report.json");
@@ -228,7 +271,9 @@ void run_solve(SolveCommandOptions options) {
                    out.string().c_str());
     }
   }
-  set_exit_code(solver.interrupted() ? 130 : 0);
+  // The report describes the solve ("interrupted" when a Ctrl-C stopped the shots); a Ctrl-C while the files were
+  // written also gives 130.
+  set_exit_code(g_interrupts.load() > 0 ? 130 : 0);
 }
 
 }  // namespace
