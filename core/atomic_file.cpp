@@ -5,6 +5,9 @@
 #include "core/error.h"
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
 #include <cstdint>
 #include <string>
 #include <system_error>
@@ -37,6 +40,19 @@ void write_file_atomically(const std::filesystem::path& path,
     fs::remove(temporary, ignored);
     throw Error("cannot rename " + temporary.string() + " to " + path.string() + ": " + error.message());
   }
+}
+
+void write_bytes_atomically(const std::filesystem::path& path, std::string_view bytes) {
+  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
+    errno = 0;
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.close();  // the last buffer is written here: a full disk shows now
+    if (!out) {
+      const std::string reason = errno != 0 ? std::strerror(errno) : "the write failed";
+      throw Error("cannot write " + path.string() + ": " + reason + "; check that its folder is writable and has room");
+    }
+  });
 }
 
 }  // namespace aarad

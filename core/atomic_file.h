@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string_view>
 
 namespace aarad {
 
@@ -14,5 +15,9 @@ namespace aarad {
 // exception propagates; a failed rename throws aarad::Error naming both paths.
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(const std::filesystem::path& temporary)>& write);
+
+// Writes `bytes` to `path` whole or not at all (write_file_atomically); a failed write, a full disk included, throws
+// aarad::Error naming `path` and the reason.
+void write_bytes_atomically(const std::filesystem::path& path, std::string_view bytes);
 
 }  // namespace aarad

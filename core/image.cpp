@@ -4,11 +4,14 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string_view>
+#include <vector>
 
 namespace aarad {
 
@@ -65,15 +68,20 @@ Image8 tone_map(const Image& image, const ToneMap& map) {
 
 namespace {
 
+// Encodes the image in memory and writes the bytes whole. OpenImageIO's PNG writer does not report a failed
+// write (on a full disk it left an empty file and no error), so the file is written by write_bytes_atomically,
+// which checks.
 void write_with_oiio(const char* format, const std::filesystem::path& path, const OIIO::ImageSpec& spec,
                      OIIO::TypeDesc type, const void* data) {
-  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
-    auto output = OIIO::ImageOutput::create(format);
-    if (!output) throw Error("cannot write " + path.string() + ": OpenImageIO has no " + format + " writer");
-    if (!output->open(temporary.string(), spec) || !output->write_image(type, data) || !output->close()) {
-      throw Error("cannot write " + path.string() + ": " + output->geterror());
-    }
-  });
+  auto output = OIIO::ImageOutput::create(format);
+  if (!output || !output->supports("ioproxy"))
+    throw Error("cannot write " + path.string() + ": OpenImageIO has no " + format + " writer to memory");
+  std::vector<unsigned char> encoded;
+  OIIO::Filesystem::IOVecOutput memory(encoded);
+  output->set_ioproxy(&memory);
+  if (!output->open(path.string(), spec) || !output->write_image(type, data) || !output->close())
+    throw Error("cannot write " + path.string() + ": " + output->geterror());
+  write_bytes_atomically(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Images: linear float RGB, the tone map that turns radiosity into display values, and writing through
-// OpenImageIO (PNG 8-bit sRGB, OpenEXR float linear). Every file is written through write_file_atomically
-// (core/atomic_file.h), so the destination is whole or untouched.
+// OpenImageIO (PNG 8-bit sRGB, OpenEXR float linear). Every file is encoded in memory and written through
+// write_bytes_atomically (core/atomic_file.h), so the destination is whole or untouched and a failed write (a full
+// disk) throws aarad::Error, which OpenImageIO's PNG writer alone does not report.
 //
 // Tone map (documented in docs/solver.md): a display value v = exposure * B per channel, clipped to [0, 1],
 // then encoded with the sRGB transfer function (IEC 61966-2-1) and rounded to 8 bits. ToneMap::from_percentile

@@ -7,7 +7,6 @@
 
 #include <charconv>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -42,14 +41,6 @@ std::string comment_lines(const std::string& comment) {
   return out;
 }
 
-void write_whole(const std::filesystem::path& path, const std::string& text) {
-  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out) throw Error(path.string() + ": cannot write the file; check that its folder exists and is writable");
-  });
-}
 
 }  // namespace
 
@@ -114,8 +105,8 @@ void write_obj(const Scene& scene, const std::string& obj_path, const std::strin
   const std::filesystem::path obj(obj_path);
   std::filesystem::path mtl = obj;
   mtl.replace_extension(".mtl");
-  write_whole(mtl, mtl_text(scene, comment));
-  write_whole(obj, obj_text(scene, mtl.filename().string(), comment));
+  write_bytes_atomically(mtl, mtl_text(scene, comment));
+  write_bytes_atomically(obj, obj_text(scene, mtl.filename().string(), comment));
 }
 
 }  // namespace aarad

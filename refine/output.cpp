@@ -11,7 +11,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -133,12 +132,7 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
 }
 
 void write_report(const nlohmann::json& report, const std::filesystem::path& path) {
-  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << json_text(report, 2) << '\n';
-    out.close();
-    if (!out) throw Error("cannot write " + path.string());
-  });
+  write_bytes_atomically(path, json_text(report, 2) + '\n');
 }
 
 }  // namespace aarad::refine

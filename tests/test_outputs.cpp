@@ -7,6 +7,8 @@
 #endif
 
 #include "core/builtin_scenes.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "core/image.h"
 #include "mesh/invariants.h"
 #include "refine/output.h"
@@ -20,10 +22,13 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <set>
 #include <string>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace aarad::refine {
@@ -197,6 +202,49 @@ TEST_F(OutputsTest, ReportHasEveryFieldOfTheContract) {
     elements += group["elements"].get<std::size_t>();
   }
   EXPECT_EQ(elements, solver_->hierarchy().leaf_count());
+}
+
+// Files larger than the process may write (RLIMIT_FSIZE, as on a full disk: the write fails part way) are not
+// left behind, whole or empty: each writer throws an error naming the file, and the directory stays empty.
+// OpenImageIO's PNG writer did not report the failed write and left an empty flat.png.
+TEST(OutputsFiles, AWriteThatFailsPartWayLeavesNoFileAndSaysSo) {
+  const fs::path directory =
+      fs::path(AARAD_BINARY_DIR) / "test-outputs" / ("failed-write-" + std::to_string(getpid()));
+  fs::remove_all(directory);
+  fs::create_directories(directory);
+  // Noise, so that the PNG and the EXR cannot compress below the limit.
+  Image image(128, 128);
+  std::uint32_t state = 12345;
+  for (float& v : image.pixels) v = static_cast<float>((state = state * 1664525u + 1013904223u) >> 8) / 16777216.0f;
+  const ToneMap map;
+  const Image8 image8 = tone_map(image, map);
+  const std::string text(100000, 'x');
+
+  struct rlimit previous {};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &previous), 0);
+  struct rlimit small = previous;
+  small.rlim_cur = 4096;
+  const auto ignore = std::signal(SIGXFSZ, SIG_IGN);  // a write beyond the limit fails (EFBIG) instead
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  const auto message = [](const std::function<void()>& write) -> std::string {
+    try {
+      write();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  const std::string png = message([&] { write_png(image8, directory / "flat.png"); });
+  const std::string exr = message([&] { write_exr(image, directory / "radiosity.exr"); });
+  const std::string bytes = message([&] { write_bytes_atomically(directory / "report.json", text); });
+  setrlimit(RLIMIT_FSIZE, &previous);
+  std::signal(SIGXFSZ, ignore);
+
+  EXPECT_NE(png.find("flat.png"), std::string::npos) << png;
+  EXPECT_NE(exr.find("radiosity.exr"), std::string::npos) << exr;
+  EXPECT_NE(bytes.find("report.json"), std::string::npos) << bytes;
+  EXPECT_TRUE(fs::is_empty(directory)) << fs::directory_iterator(directory)->path();
+  fs::remove_all(directory);
 }
 
 // A floor one unit below the eye, reaching from behind the camera far ahead, seen level: it fills the lower half of
