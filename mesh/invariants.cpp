@@ -65,6 +65,14 @@ class Checker {
     return std::move(violations_);
   }
 
+  std::vector<Violation> run_display(const DisplayMesh& display) {
+    if (check_display_positions(display)) {
+      check_display_hanging_vertices(display);
+      check_display_triangles(display);
+    }
+    return std::move(violations_);
+  }
+
  private:
   template <typename... Parts>
   void report(const char* invariant, NodeId node, const Parts&... parts) {
@@ -342,6 +350,93 @@ class Checker {
     }
   }
 
+  // The display mesh's first vertices are the leaf mesh's, at the same points, each with a value.
+  bool check_display_positions(const DisplayMesh& d) {
+    const std::size_t vertices = mesh_.n_vertices();
+    if (d.positions.size() < vertices || d.vertex_values.size() != d.positions.size() ||
+        d.triangle_leaf.size() != d.triangles.size()) {
+      report("display-positions", kNoNode, "the display mesh has ", d.positions.size(), " positions, ",
+             d.vertex_values.size(), " values and ", d.triangles.size(), " triangles for ", d.triangle_leaf.size(),
+             " leaves, for a leaf mesh of ", vertices, " vertices");
+      return false;
+    }
+    for (VertexHandle v : mesh_.vertices())
+      if (d.positions[static_cast<std::size_t>(v.idx())] != point(v))
+        report("display-positions", kNoNode, "display vertex ", v.idx(), " is not at leaf-mesh vertex ", v.idx());
+    for (const auto& triangle : d.triangles)
+      for (const std::uint32_t index : triangle)
+        if (index >= d.positions.size()) {
+          report("display-positions", kNoNode, "a triangle names vertex ", index, " of ", d.positions.size());
+          return false;
+        }
+    return true;
+  }
+
+  // Every hanging vertex shows the linear interpolation of its host edge's ends, so no shading seam appears.
+  void check_display_hanging_vertices(const DisplayMesh& d) {
+    std::vector<VertexHandle> loop;
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (!h_.is_leaf(n) || m_.face[n] < 0 || !loop_of(FaceHandle(m_.face[n]), loop)) continue;
+      const int corners = m_.corner_count(n);
+      const auto first = std::find(loop.begin(), loop.end(), VertexHandle(m_.corners[n][0]));
+      if (first == loop.end()) continue;  // reported by check_invariants
+      std::rotate(loop.begin(), first, loop.end());
+      int k = 0;
+      for (std::size_t i = 1; i < loop.size(); ++i) {
+        const VertexHandle v = loop[i];
+        const int a = m_.corners[n][static_cast<std::size_t>(k)];
+        const int b = m_.corners[n][static_cast<std::size_t>((k + 1) % corners)];
+        if (v.idx() == b) {
+          k = (k + 1) % corners;
+          continue;
+        }
+        const Vec3 pa = m_.point(a), edge = m_.point(b) - pa;
+        const double t = glm::dot(point(v) - pa, edge) / glm::dot(edge, edge);
+        const Rgb& va = d.vertex_values[static_cast<std::size_t>(a)];
+        const Rgb& vb = d.vertex_values[static_cast<std::size_t>(b)];
+        const Rgb& value = d.vertex_values[static_cast<std::size_t>(v.idx())];
+        for (int ch = 0; ch < 3; ++ch) {
+          const double expected = va[ch] * (1.0 - t) + vb[ch] * t;
+          const double scale = std::max(std::abs(va[ch]), std::abs(vb[ch]));
+          if (!(std::abs(value[ch] - expected) <= kRadiosityTolerance * scale))
+            report("display-hanging-vertex", n, "hanging vertex ", v.idx(), " of leaf ", n, " shows ", value[ch],
+                   " in channel ", ch, ", not ", expected, " between vertices ", a, " and ", b, " (t = ", t, ")");
+        }
+      }
+    }
+  }
+
+  // Each leaf's triangles cover its area, and no directed edge appears twice: the triangles tile the leaves with
+  // no crack (a crack leaves a leaf's area short) and no overlap (two triangles on one side of an edge).
+  void check_display_triangles(const DisplayMesh& d) {
+    std::vector<double> covered(m_.parent.size(), 0.0), perimeter(m_.parent.size(), 0.0);
+    std::vector<std::array<std::uint32_t, 2>> edges;
+    edges.reserve(3 * d.triangles.size());
+    for (std::size_t t = 0; t < d.triangles.size(); ++t) {
+      const NodeId leaf = d.triangle_leaf[t];
+      const auto& tri = d.triangles[t];
+      if (!valid_node(leaf) || !h_.is_leaf(leaf)) {
+        report("display-crack-free", valid_node(leaf) ? leaf : kNoNode, "triangle ", t, " belongs to node ", leaf,
+               ", not a leaf");
+        continue;
+      }
+      const std::array<Vec3, 3> p{d.positions[tri[0]], d.positions[tri[1]], d.positions[tri[2]]};
+      covered[leaf] += aarad::area(p);
+      perimeter[leaf] += Checker::perimeter(p);
+      for (int k = 0; k < 3; ++k) edges.push_back({tri[static_cast<std::size_t>(k)], tri[static_cast<std::size_t>((k + 1) % 3)]});
+    }
+    for (NodeId n = 0; n < m_.parent.size(); ++n) {
+      if (!h_.is_leaf(n)) continue;
+      if (!(std::abs(covered[n] - m_.area[n]) <= area_tolerance(m_.area[n], perimeter[n])))
+        report("display-crack-free", n, "the triangles of leaf ", n, " cover ", covered[n], " of its area ", m_.area[n]);
+    }
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t i = 1; i < edges.size(); ++i)
+      if (edges[i] == edges[i - 1])
+        report("display-crack-free", kNoNode, "display edge ", edges[i][0], " -> ", edges[i][1],
+               " belongs to two triangles on the same side");
+  }
+
   void check_balance() {
     std::vector<NodeId> neighbours;
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
@@ -520,5 +615,9 @@ class Checker {
 }  // namespace
 
 std::vector<Violation> check_invariants(const Hierarchy& hierarchy) { return Checker(hierarchy).run(); }
+
+std::vector<Violation> check_display(const Hierarchy& hierarchy, const DisplayMesh& display) {
+  return Checker(hierarchy).run_display(display);
+}
 
 }  // namespace aarad::mesh

@@ -1,6 +1,7 @@
 // The public subdivision-invariant checker (see docs/ and ../shared/design.md for the list).
 #pragma once
 
+#include "mesh/display.h"
 #include "mesh/hierarchy.h"
 
 #include <string>
@@ -16,5 +17,11 @@ struct Violation {
 
 // Every violated invariant; empty when the hierarchy is sound.
 std::vector<Violation> check_invariants(const Hierarchy& hierarchy);
+
+// The display reconstruction of `hierarchy` (build_display_mesh): its first vertices are the leaf mesh's, in place;
+// every hanging vertex's value is the linear interpolation of its host edge's ends (display-hanging-vertex); the
+// triangles of every leaf cover its area, and no edge is used twice the same way round (display-crack-free: no
+// crack, no overlap). Empty when the display mesh is sound.
+std::vector<Violation> check_display(const Hierarchy& hierarchy, const DisplayMesh& display);
 
 }  // namespace aarad::mesh

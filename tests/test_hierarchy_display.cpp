@@ -16,6 +16,7 @@
 #include "mesh/display.h"
 #include "mesh/export_ply.h"
 #include "mesh/hierarchy.h"
+#include "mesh/invariants.h"
 #include "mesh/leaf_mesh.h"
 #include "test_hierarchy_scenes.h"
 
@@ -50,6 +51,9 @@ std::size_t index_of(const DisplayMesh& d, const Vec3& p) {
 // Crack-free: every triangle edge inside a surface is shared by exactly two triangles with opposite
 // directions; the rest lie on the outer boundary; the triangles cover each surface's area, none degenerate.
 void expect_crack_free(const Hierarchy& h, const DisplayMesh& d) {
+  const std::vector<Violation> violations = check_display(h, d);
+  EXPECT_TRUE(violations.empty()) << violations.size() << " display violations, the first: "
+                                  << (violations.empty() ? "" : violations.front().message);
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
   std::vector<double> area(h.scene().surfaces.size(), 0.0);
   for (std::size_t t = 0; t < d.triangles.size(); ++t) {

@@ -1,6 +1,7 @@
 // Every invariant broken on purpose (through Hierarchy::Impl, mesh/leaf_mesh.h) and reported by
 // check_invariants under its name; the intact structure reports nothing.
 #include "core/polygon.h"
+#include "mesh/display.h"
 #include "mesh/hierarchy.h"
 #include "mesh/invariants.h"
 #include "mesh/leaf_mesh.h"
@@ -300,6 +301,36 @@ TEST(InvariantBroken, SurfaceMovedOffItsPlane) {
   const auto violations = check_invariants(h);
   EXPECT_TRUE(reports(violations, "surface-plane")) << describe(violations);
   EXPECT_FALSE(reports(violations, "children-tile-parent")) << describe(violations);
+}
+
+// The display reconstruction of refined(): sound as built; a hanging vertex showing its own value instead of the
+// interpolation along its host edge is a shading seam; a triangle left out is a crack, one repeated an overlap.
+TEST(InvariantBroken, DisplayHangingVertexNotInterpolatedOrTrianglesNotTilingTheLeaf) {
+  const Hierarchy h = refined();
+  std::vector<Rgb> values(h.node_count());
+  for (NodeId n = 0; n < h.node_count(); ++n) values[n] = h.radiosity(n);
+  const DisplayMesh sound = build_display_mesh(h, values);
+  EXPECT_TRUE(check_display(h, sound).empty()) << describe(check_display(h, sound));
+
+  DisplayMesh seam = sound;
+  const int hanging = vertex_at(h, Vec3(1, 0.5, 0));  // on L's right edge, a corner of R's children
+  ASSERT_GE(hanging, 0);
+  seam.vertex_values[static_cast<std::size_t>(hanging)].g += 1e-6;
+  EXPECT_TRUE(reports(check_display(h, seam), "display-hanging-vertex")) << describe(check_display(h, seam));
+
+  DisplayMesh crack = sound;
+  crack.triangles.pop_back();
+  crack.triangle_leaf.pop_back();
+  EXPECT_TRUE(reports(check_display(h, crack), "display-crack-free")) << describe(check_display(h, crack));
+
+  DisplayMesh overlap = sound;
+  overlap.triangles.push_back(sound.triangles.front());
+  overlap.triangle_leaf.push_back(sound.triangle_leaf.front());
+  EXPECT_TRUE(reports(check_display(h, overlap), "display-crack-free")) << describe(check_display(h, overlap));
+
+  DisplayMesh moved = sound;
+  moved.positions[0].x += 0.25;
+  EXPECT_TRUE(reports(check_display(h, moved), "display-positions")) << describe(check_display(h, moved));
 }
 
 // A 2 x 1 rectangle a million units from the origin (a building in georeferenced metres), every leaf split

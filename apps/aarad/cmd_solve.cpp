@@ -220,7 +220,11 @@ void run_solve(SolveCommandOptions options) {
                    "counter-clockwise\n");
     }
 
-    const std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
+    // The hierarchy's invariants, and those of the display reconstruction the images and the PLY are made from.
+    std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
+    const std::vector<mesh::Violation> display = mesh::check_display(
+        solver.hierarchy(), mesh::build_display_mesh(solver.hierarchy(), solver.displayed_radiosity()));
+    violations.insert(violations.end(), display.begin(), display.end());
     // The first few on stderr; report.json lists every one.
     constexpr std::size_t kShown = 10;
     for (std::size_t i = 0; i < std::min(violations.size(), kShown); ++i) {
