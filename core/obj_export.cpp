@@ -9,8 +9,10 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <tuple>
+#include <vector>
 
 namespace aarad {
 namespace {
@@ -25,11 +27,22 @@ std::string number(double v) {
 
 std::string triple(double a, double b, double c) { return number(a) + " " + number(b) + " " + number(c); }
 
-std::string material_name(const std::string& name) {
-  std::string out = name.empty() ? std::string("unnamed") : name;
-  for (char& ch : out)
-    if (ch == ' ' || ch == '\t') ch = '_';
-  return out;
+// The name each material is written under: blanks become underscores (an MTL name is one word), and a name that
+// an earlier material already took ("red paint" and "red_paint", or two materials of one name) gets "_2", "_3",
+// ..., so every material reads back as itself.
+std::vector<std::string> material_names(const Scene& scene) {
+  std::vector<std::string> names;
+  std::set<std::string> taken;
+  for (const Material& m : scene.materials) {
+    std::string name = m.name.empty() ? std::string("unnamed") : m.name;
+    for (char& ch : name)
+      if (ch == ' ' || ch == '\t') ch = '_';
+    std::string unique = name;
+    for (int k = 2; taken.contains(unique); ++k) unique = name + "_" + std::to_string(k);
+    taken.insert(unique);
+    names.push_back(std::move(unique));
+  }
+  return names;
 }
 
 std::string comment_lines(const std::string& comment) {
@@ -72,6 +85,7 @@ std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const
         face_indices[fi].push_back(it->second);
       }
 
+  const std::vector<std::string> materials = material_names(scene);
   for (const Group& g : scene.groups) {
     if (g.faces.empty()) continue;
     out << "o " << g.name << "\n";
@@ -80,7 +94,7 @@ std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const
       const Face& f = scene.faces[fi];
       if (material != f.material) {
         material = f.material;
-        out << "usemtl " << material_name(scene.materials[f.material].name) << "\n";
+        out << "usemtl " << materials[f.material] << "\n";
       }
       out << "f";
       for (const std::size_t i : face_indices[fi]) out << " " << i;
@@ -93,8 +107,10 @@ std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const
 std::string mtl_text(const Scene& scene, const std::string& comment) {
   std::ostringstream out;
   out << comment_lines(comment);
-  for (const Material& m : scene.materials) {
-    out << "newmtl " << material_name(m.name) << "\n";
+  const std::vector<std::string> names = material_names(scene);
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    const Material& m = scene.materials[i];
+    out << "newmtl " << names[i] << "\n";
     out << "Kd " << triple(m.reflectance.r, m.reflectance.g, m.reflectance.b) << "\n";
     out << "Ke " << triple(m.emission.r, m.emission.g, m.emission.b) << "\n";
   }

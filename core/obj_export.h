@@ -11,7 +11,8 @@ namespace aarad {
 
 // The OBJ text: an optional comment (each line prefixed with "# "), the camera comment when the scene has
 // a camera, `mtllib <mtl_file_name>`, the distinct vertices, then per group `o <name>` with its faces in
-// order (`usemtl` where the material changes). Spaces in material names become underscores.
+// order (`usemtl` where the material changes). Spaces in material names become underscores, and a name taken by an
+// earlier material gets "_2", "_3", ... (each material reads back as itself).
 std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const std::string& comment = "");
 // The MTL text: per material `newmtl`, `Kd` (reflectance) and `Ke` (emission).
 std::string mtl_text(const Scene& scene, const std::string& comment = "");

@@ -3,6 +3,7 @@
 // the scene contract of shared/design.md; data/scenes/cornell.obj imports to the built-in Cornell box.
 #include "core/builtin_scenes.h"
 #include "core/error.h"
+#include "core/obj_export.h"
 #include "core/obj_import.h"
 #include "core/polygon.h"
 #include "core/scene.h"
@@ -68,6 +69,34 @@ const char* kSquareMtl =
     "Ke 4 4 4\n";
 
 // ---- Files ---------------------------------------------------------------------------------------------
+
+// write_obj and import_obj round trip: materials whose names are one after blanks become underscores ("red paint",
+// "red_paint"), or are the same, are written under distinct names and each reads back as itself (the second
+// used to be read as the first, lamp and all).
+TEST_F(SceneImport, import_of_an_export_keeps_materials_whose_names_collide) {
+  Scene scene;
+  scene.name = "collide";
+  const auto paint = scene.add_material({"red paint", Rgb(0.7, 0.1, 0.1), Rgb(0.0)});
+  const auto lamp = scene.add_material({"red_paint", Rgb(0.1, 0.1, 0.7), Rgb(1.0)});
+  const auto twin = scene.add_material({"red paint", Rgb(0.3, 0.3, 0.3), Rgb(0.0)});
+  const auto floor = scene.add_group("floor");
+  scene.add_face(floor, paint, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  scene.add_face(scene.add_group("light"), lamp, {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}});
+  scene.add_face(scene.add_group("wall"), twin, {{0, 0, 0}, {0, 1, 0}, {0, 1, 1}, {0, 0, 1}});
+  scene.build_surfaces();
+  scene.validate();
+  const std::string path = (dir_ / "collide.obj").string();
+  write_obj(scene, path);
+  const Scene back = import_obj(path);
+  EXPECT_TRUE(back.warnings.empty()) << back.warnings.front();
+  ASSERT_EQ(back.faces.size(), scene.faces.size());
+  for (std::size_t f = 0; f < scene.faces.size(); ++f) {
+    const Material& written = scene.materials[scene.faces[f].material];
+    const Material& read = back.materials[back.faces[f].material];
+    EXPECT_EQ(read.reflectance, written.reflectance) << "face " << f << " (" << read.name << ")";
+    EXPECT_EQ(read.emission, written.emission) << "face " << f << " (" << read.name << ")";
+  }
+}
 
 TEST_F(SceneImport, import_missing_obj_is_error_naming_file) {
   const std::string path = (dir_ / "nowhere.obj").string();
