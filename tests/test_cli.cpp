@@ -193,6 +193,22 @@ TEST(Cli, StdoutThatCannotBeWrittenExitsOneAndSaysSo) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
+// Images too large for the memory the process may use (ulimit -v: 1.5 GB; one 16384 x 16384 float image takes
+// 3.2 GB) end the program with exit 3 and a message that says so and what needs less; mesh.ply, written first,
+// is kept.
+TEST(Cli, OutOfMemorySaysSoAndKeepsTheMesh) {
+  const fs::path out = work_dir() / "out-of-memory", err = work_dir() / "out-of-memory.txt";
+  fs::remove_all(out);
+  const std::string command = "ulimit -v 1500000; " AARAD_BINARY_DIR "/apps/aarad/aarad solve cornell --quiet "
+                              "--max-shots 5 --width 16384 --height 16384 --out " +
+                              out.string() + " 2>" + err.string();
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3) << slurp(err);
+  EXPECT_NE(slurp(err).find("aarad: internal error: out of memory"), std::string::npos) << slurp(err);
+  EXPECT_TRUE(fs::exists(out / "mesh.ply"));
+}
+
 TEST(Cli, UnknownCommandIsNamed) {
   const ProgramRun r = aarad("bogus");
   EXPECT_EQ(r.code, 2);

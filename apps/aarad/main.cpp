@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <new>
 #include <string>
 
 namespace {
@@ -40,8 +41,14 @@ int run(int argc, char** argv) {
   } catch (const aarad::Error& e) {
     std::fprintf(stderr, "aarad: error: %s\n", e.what());
     return 1;
+  } catch (const std::bad_alloc&) {
+    // Out of memory is an internal error too (exit code 3), said in words.
+    std::fprintf(stderr,
+                 "aarad: internal error: out of memory (std::bad_alloc); fewer elements (a larger --element-size, "
+                 "--min-area or a lower --max-level) or smaller images (--width, --height) need less\n");
+    return 3;
   } catch (const std::exception& e) {
-    // Anything else (out of memory, a bug) is an internal error: exit code 3 (docs/solver.md).
+    // Anything else (a bug) is an internal error: exit code 3 (docs/solver.md).
     std::fprintf(stderr, "aarad: internal error: %s\n", e.what());
     return 3;
   }
