@@ -319,7 +319,10 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
                                                             "out: from the scene's size)"));
     }
   }
-  for (const auto& [key, where] : unknown) {
+  // In the order of their first lines, as a reader goes through the file.
+  std::vector<std::pair<std::string, std::pair<int, int>>> by_line(unknown.begin(), unknown.end());
+  std::sort(by_line.begin(), by_line.end(), [](const auto& a, const auto& b) { return a.second.first < b.second.first; });
+  for (const auto& [key, where] : by_line) {
     warnings.push_back(InputError::format(
         path, where.first, "'" + key + "' is not an OBJ statement; " +
                                (where.second == 1 ? std::string("this line is")
@@ -339,7 +342,8 @@ struct MtlEntry {
   int ke_line = 0;
 };
 
-Rgb parse_colour(const std::string& path, int line, const std::vector<std::string>& t) {
+Rgb parse_colour(const std::string& path, int line, const std::vector<std::string>& t,
+                 std::vector<std::string>& warnings) {
   // "Kd r g b" or "Kd r" (grey), as the MTL format allows.
   std::vector<double> values;
   for (std::size_t i = 1; i < t.size() && values.size() < 3; ++i) {
@@ -347,6 +351,10 @@ Rgb parse_colour(const std::string& path, int line, const std::vector<std::strin
     if (!v) throw InputError(path, line, "'" + t[0] + "' needs one or three numbers, got '" + t[i] + "'; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
     values.push_back(*v);
   }
+  if (values.size() == 3 && t.size() > 4)
+    warnings.push_back(InputError::format(path, line, "'" + t[0] + "' takes one or three numbers; the " +
+                                                          std::to_string(t.size() - 4) + " after the third ('" + t[4] +
+                                                          "' first) are ignored"));
   if (values.size() == 1) return Rgb(values[0]);
   if (values.size() == 3) return Rgb(values[0], values[1], values[2]);
   throw InputError(path, line, "'" + t[0] + "' needs one or three numbers; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
@@ -378,10 +386,10 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
                                                                 "); this definition is ignored. Rename one of them"));
       }
     } else if (current && t[0] == "Kd") {
-      current->kd = parse_colour(path, number, t);
+      current->kd = parse_colour(path, number, t, warnings);
       current->kd_line = number;
     } else if (current && t[0] == "Ke") {
-      current->ke = parse_colour(path, number, t);
+      current->ke = parse_colour(path, number, t, warnings);
       current->ke_line = number;
     }
   }

@@ -633,6 +633,22 @@ TEST_F(SceneImport, import_unknown_statements_warn_once_with_their_first_line) {
     EXPECT_EQ(w.find("'vt'"), std::string::npos) << w;
     EXPECT_EQ(w.find("'s'"), std::string::npos) << w;
   }
+  // Several unknown statements warn in the order of their first lines, not of their names.
+  const Scene two = import_obj(write("typos.obj", "v 0 0 0\nzz 1\nv 1 0 0\naa 2\nv 1 1 0\nf 1 2 3\n"));
+  ASSERT_GE(two.warnings.size(), 2u);
+  EXPECT_NE(two.warnings[0].find("typos.obj:2: 'zz'"), std::string::npos) << two.warnings[0];
+  EXPECT_NE(two.warnings[1].find("typos.obj:4: 'aa'"), std::string::npos) << two.warnings[1];
+}
+
+// Kd and Ke take one or three numbers: more are not silently dropped (a typo of a fourth channel).
+TEST_F(SceneImport, import_colour_with_more_than_three_numbers_warns_with_its_line) {
+  write("four.mtl", "newmtl grey\nKd 0.7 0.7 0.7 0.9\n");
+  const std::string obj = write("four.obj", "mtllib four.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl grey\nf 1 2 3\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(has_warning(scene, "four.mtl:2: 'Kd' takes one or three numbers; the 1 after the third ('0.9' first) "
+                                 "are ignored"))
+      << scene.warnings.front();
+  EXPECT_EQ(scene.materials[scene.faces[0].material].reflectance, Rgb(0.7));
 }
 
 TEST_F(SceneImport, import_camera_comment_is_read_back) {
