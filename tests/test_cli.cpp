@@ -120,6 +120,16 @@ TEST(Cli, UnknownOptionAndBadResolutionExitTwo) {
     EXPECT_EQ(r.code, 2) << command;
     EXPECT_NE(r.err.find("--relaxation"), std::string::npos) << command << ": " << r.err;
   }
+  // Usage errors begin like every error and say where the options are; an option given twice says so in words.
+  const ProgramRun unknown = aarad("solve cornell --bogus");
+  EXPECT_NE(unknown.err.find("aarad: error: The following argument was not expected: --bogus (aarad solve --help "
+                             "lists the options)"),
+            std::string::npos)
+      << unknown.err;
+  const ProgramRun twice = aarad("solve cornell --resolution 5 --resolution 6");
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.err.find("aarad: error: --resolution is given 2 times; give it once"), std::string::npos)
+      << twice.err;
   const ProgramRun empty_out = aarad("solve cornell --out ''");  // not silently out/cornell
   EXPECT_EQ(empty_out.code, 2);
   EXPECT_NE(empty_out.err.find("--out: the directory name is empty"), std::string::npos) << empty_out.err;

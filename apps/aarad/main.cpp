@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <exception>
 #include <new>
+#include <regex>
 #include <string>
 
 namespace {
@@ -15,6 +16,19 @@ namespace {
 // Parses the command line and runs the command; returns the exit code of docs/solver.md.
 int run(int argc, char** argv) {
   CLI::App app{"aarad: progressive-refinement radiosity with anti-aliased hemicubes"};
+  // Usage errors read like every other error, and say where the options are listed. Set before the commands are
+  // added: each takes its parent's.
+  app.failure_message([](const CLI::App* parsed, const CLI::Error& e) {
+    std::string what = e.what();
+    // CLI11's words for an option given twice ("--resolution: At Most 1 required but received 2").
+    static const std::regex kGivenTwice(R"(^(\S+): At Most 1 required but received (\d+)$)");
+    std::smatch given;
+    if (std::regex_match(what, given, kGivenTwice))
+      what = given[1].str() + " is given " + given[2].str() + " times; give it once";
+    std::string help = "aarad --help";
+    for (const CLI::App* command : parsed->get_subcommands()) help = "aarad " + command->get_name() + " --help";
+    return "aarad: error: " + what + " (" + help + " lists the options)\n";
+  });
   app.require_subcommand(1);
   app.set_version_flag("--version", "aarad 0.1.0");
   aarad::app::add_commands(app);
