@@ -319,8 +319,10 @@ class Checker {
     return t >= -slack && t <= 1.0 + slack && glm::length(seg[0] + t * d - p) <= length_tolerance_;
   }
 
-  // Between two consecutive corners of a leaf, the other loop vertices lie on the straight edge, in order.
-  void check_hanging_vertices() {
+  // Calls visit(leaf, vertex, k, a, b) for every vertex on the face loop of every leaf that is not one of its
+  // corners: a hanging vertex, between corners k and k + 1, vertex indices a and b (its host edge).
+  template <class Visit>
+  void for_each_hanging_vertex(Visit&& visit) const {
     std::vector<VertexHandle> loop;
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
       if (!h_.is_leaf(n) || m_.face[n] < 0 || !loop_of(FaceHandle(m_.face[n]), loop)) continue;
@@ -329,25 +331,41 @@ class Checker {
       if (first == loop.end()) continue;  // reported by check_face_map
       std::rotate(loop.begin(), first, loop.end());
       int k = 0;
-      double last_t = 0.0;
-      for (std::size_t i = 1; i <= loop.size(); ++i) {
-        const VertexHandle v = loop[i % loop.size()];
-        const int next_corner = m_.corners[n][static_cast<std::size_t>((k + 1) % corners)];
-        if (v.idx() == next_corner) {
+      for (std::size_t i = 1; i < loop.size(); ++i) {
+        const int a = m_.corners[n][static_cast<std::size_t>(k)];
+        const int b = m_.corners[n][static_cast<std::size_t>((k + 1) % corners)];
+        if (loop[i].idx() == b) {
           k = (k + 1) % corners;
-          last_t = 0.0;
           continue;
         }
-        const Vec3 a = m_.point(m_.corners[n][static_cast<std::size_t>(k)]), b = m_.point(next_corner);
-        const Vec3 d = b - a, p = point(v);
-        const double t = glm::dot(p - a, d) / glm::dot(d, d);
-        const double off = glm::length(a + t * d - p);
-        if (off > length_tolerance_ || t <= last_t || t >= 1.0)
-          report("hanging-vertex-on-edge", n, "vertex ", v.idx(), " of leaf ", n, " lies at parameter ", t,
-                 " and distance ", off, " from its host edge (corners ", k, " and ", (k + 1) % corners, ")");
-        last_t = t;
+        visit(n, loop[i], k, a, b);
       }
     }
+  }
+
+  // The parameter of point p along the edge from vertex a to vertex b.
+  double edge_parameter(const Vec3& p, int a, int b) const {
+    const Vec3 pa = m_.point(a), edge = m_.point(b) - pa;
+    return glm::dot(p - pa, edge) / glm::dot(edge, edge);
+  }
+
+  // Between two consecutive corners of a leaf, the other loop vertices lie on the straight edge, in order.
+  void check_hanging_vertices() {
+    NodeId last_leaf = kNoNode;
+    int last_edge = -1;
+    double last_t = 0.0;
+    for_each_hanging_vertex([&](NodeId n, VertexHandle v, int k, int a, int b) {
+      if (n != last_leaf || k != last_edge) last_t = 0.0;  // the first on this edge
+      last_leaf = n;
+      last_edge = k;
+      const Vec3 p = point(v);
+      const double t = edge_parameter(p, a, b);
+      const double off = glm::length(m_.point(a) + t * (m_.point(b) - m_.point(a)) - p);
+      if (off > length_tolerance_ || t <= last_t || t >= 1.0)
+        report("hanging-vertex-on-edge", n, "vertex ", v.idx(), " of leaf ", n, " lies at parameter ", t,
+               " and distance ", off, " from its host edge (corners ", k, " and ", (k + 1) % m_.corner_count(n), ")");
+      last_t = t;
+    });
   }
 
   // The display mesh's first vertices are the leaf mesh's, at the same points, each with a value.
@@ -374,36 +392,19 @@ class Checker {
 
   // Every hanging vertex shows the linear interpolation of its host edge's ends, so no shading seam appears.
   void check_display_hanging_vertices(const DisplayMesh& d) {
-    std::vector<VertexHandle> loop;
-    for (NodeId n = 0; n < m_.parent.size(); ++n) {
-      if (!h_.is_leaf(n) || m_.face[n] < 0 || !loop_of(FaceHandle(m_.face[n]), loop)) continue;
-      const int corners = m_.corner_count(n);
-      const auto first = std::find(loop.begin(), loop.end(), VertexHandle(m_.corners[n][0]));
-      if (first == loop.end()) continue;  // reported by check_invariants
-      std::rotate(loop.begin(), first, loop.end());
-      int k = 0;
-      for (std::size_t i = 1; i < loop.size(); ++i) {
-        const VertexHandle v = loop[i];
-        const int a = m_.corners[n][static_cast<std::size_t>(k)];
-        const int b = m_.corners[n][static_cast<std::size_t>((k + 1) % corners)];
-        if (v.idx() == b) {
-          k = (k + 1) % corners;
-          continue;
-        }
-        const Vec3 pa = m_.point(a), edge = m_.point(b) - pa;
-        const double t = glm::dot(point(v) - pa, edge) / glm::dot(edge, edge);
-        const Rgb& va = d.vertex_values[static_cast<std::size_t>(a)];
-        const Rgb& vb = d.vertex_values[static_cast<std::size_t>(b)];
-        const Rgb& value = d.vertex_values[static_cast<std::size_t>(v.idx())];
-        for (int ch = 0; ch < 3; ++ch) {
-          const double expected = va[ch] * (1.0 - t) + vb[ch] * t;
-          const double scale = std::max(std::abs(va[ch]), std::abs(vb[ch]));
-          if (!(std::abs(value[ch] - expected) <= kRadiosityTolerance * scale))
-            report("display-hanging-vertex", n, "hanging vertex ", v.idx(), " of leaf ", n, " shows ", value[ch],
-                   " in channel ", ch, ", not ", expected, " between vertices ", a, " and ", b, " (t = ", t, ")");
-        }
+    for_each_hanging_vertex([&](NodeId n, VertexHandle v, int, int a, int b) {
+      const double t = edge_parameter(point(v), a, b);
+      const Rgb& va = d.vertex_values[static_cast<std::size_t>(a)];
+      const Rgb& vb = d.vertex_values[static_cast<std::size_t>(b)];
+      const Rgb& value = d.vertex_values[static_cast<std::size_t>(v.idx())];
+      for (int ch = 0; ch < 3; ++ch) {
+        const double expected = va[ch] * (1.0 - t) + vb[ch] * t;
+        const double scale = std::max(std::abs(va[ch]), std::abs(vb[ch]));
+        if (!(std::abs(value[ch] - expected) <= kRadiosityTolerance * scale))
+          report("display-hanging-vertex", n, "hanging vertex ", v.idx(), " of leaf ", n, " shows ", value[ch],
+                 " in channel ", ch, ", not ", expected, " between vertices ", a, " and ", b, " (t = ", t, ")");
       }
-    }
+    });
   }
 
   // Each leaf's triangles cover its area, and no directed edge appears twice: the triangles tile the leaves with
