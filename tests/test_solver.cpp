@@ -164,7 +164,7 @@ FurnaceFigures solve_furnace(const std::string& backend, int resolution, double 
   options.converge = 1e-4;
   options.adaptive = false;  // the exact answer is flat; the figures measure form-factor error alone
   // From the centroid alone, the point-to-area approximation of a patch's factors (the same for every back
-  // end) costs about 3.4 % RMS at the furnace's default meshing, most of it where walls meet; the near-field
+  // end) costs about 3.3 % RMS at the furnace's default meshing, most of it where walls meet; the near-field
   // correction (on by default) takes it to 0.6 %. 2 x 2 Gauss points per shooting patch average the rest down,
   // so what remains is mostly the back ends' own error: aliasing (classical) or the coverage-list approximation
   // (AA). See docs/solver.md.

@@ -313,7 +313,7 @@ void add_solve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--overshoot", options->solver.overshoot,
                 "Ambient overshooting: also shoot rho x the ambient unshot radiosity (fewer shots; default off)");
-  cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0)")
+  cmd->add_option("--max-level", options->max_level, "Deepest element level (patches are level 0; default 8)")
       ->transform(whole_number_in(1, 60));
   cmd->add_option("--min-area", options->min_area,
                   "Smallest element a split may create, scene units^2 (0: 1e-7 x the squared scene diagonal)")
