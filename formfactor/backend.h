@@ -21,9 +21,15 @@ struct Shooter {
   Vec3 tangent{1.0, 0.0, 0.0};
   Vec3 bitangent{0.0, 1.0, 0.0};
 
-  // A frame around `normal` (unit) with a deterministic tangent.
+  // A frame around `normal` (normalized here) with a deterministic tangent. Throws aarad::Error when `normal` is
+  // zero or not finite.
   static Shooter from_normal(const Vec3& centre, const Vec3& normal);
 };
+
+// What every back end's compute() checks first: a finite centre, a right-handed orthonormal frame (tangent x
+// bitangent = normal, within 1e-9; a Shooter written by hand with a normal other than +z needs its tangents too:
+// use from_normal), and one output value per receiver. Throws aarad::Error naming what is wrong.
+void check_shot(const Shooter& shooter, const ReceiverView& receivers, std::span<const double> out);
 
 struct BackendOptions {
   int resolution = 100;  // pixels along the full top face of a hemicube

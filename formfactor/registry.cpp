@@ -6,10 +6,15 @@
 #include "formfactor/hemicube.h"
 
 #include <cmath>
+#include <string>
 
 namespace aarad::formfactor {
 
 Shooter Shooter::from_normal(const Vec3& centre, const Vec3& normal) {
+  const double length = glm::length(normal);
+  if (!(length > 0.0) || !std::isfinite(length))
+    throw Error("Shooter::from_normal: the normal (" + std::to_string(normal.x) + ", " + std::to_string(normal.y) +
+                ", " + std::to_string(normal.z) + ") has no direction");
   Shooter s;
   s.centre = centre;
   s.normal = glm::normalize(normal);
@@ -20,6 +25,21 @@ Shooter Shooter::from_normal(const Vec3& centre, const Vec3& normal) {
   s.tangent = glm::normalize(axis - glm::dot(axis, n) * n);
   s.bitangent = glm::cross(n, s.tangent);  // tangent x bitangent = normal
   return s;
+}
+
+void check_shot(const Shooter& shooter, const ReceiverView& receivers, std::span<const double> out) {
+  if (out.size() != receivers.size())
+    throw Error("form factors: " + std::to_string(out.size()) + " output values for " +
+                std::to_string(receivers.size()) + " receivers; pass one per receiver");
+  const Vec3& c = shooter.centre;
+  if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z))
+    throw Error("form factors: the shooter's centre is not finite");
+  const auto unit = [](const Vec3& v) { return std::abs(glm::dot(v, v) - 1.0) <= 1e-9; };
+  const Vec3 product = glm::cross(shooter.tangent, shooter.bitangent);
+  if (!unit(shooter.normal) || !unit(shooter.tangent) || !unit(shooter.bitangent) ||
+      std::abs(glm::dot(shooter.tangent, shooter.bitangent)) > 1e-9 || !(glm::length(product - shooter.normal) <= 1e-9))
+    throw Error("form factors: the shooter's tangent, bitangent and normal are not a right-handed orthonormal frame "
+                "(tangent x bitangent = normal); make the shooter with Shooter::from_normal");
 }
 
 std::vector<std::string> backend_names() { return {"aa-hemicube", "hemicube", "analytic"}; }

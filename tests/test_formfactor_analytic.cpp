@@ -1,9 +1,15 @@
 // The analytic back end (Baum, Rushmeier and Winget 1989, eq. 9) against Howell's closed forms
 // (references.md): B-3, the centred square, the off-axis disk, B-2, and a closed cube.
+#include "core/error.h"
 #include "formfactor/analytic.h"
 #include "formfactor_fixtures.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
 
 namespace aarad::formfactor {
 namespace {
@@ -79,6 +85,31 @@ TEST(FormfactorAnalytic, SubsetLeavesOthersUntouched) {
   AnalyticBackend().compute(kUp, view, subset, out);
   EXPECT_EQ(out[0], -1.0);
   EXPECT_NEAR(out[1], 0.1385316060, 1e-10);
+}
+
+// Every back end refuses a shot it cannot compute instead of returning wrong numbers or crashing: a frame written
+// by hand around a normal other than +z (the default tangents then make a left-handed frame: the analytic value came
+// out negative), a normal without a direction (its NaN frame crashed GMP with SIGFPE), and an output span of the
+// wrong size (the analytic back end wrote past it).
+TEST(FormfactorBackends, ShotsWithABadFrameOrOutputSizeAreRefused) {
+  ReceiverView view;
+  add(view, rectangle({-0.5, -0.5, -1}, {1, 0, 0}, {0, 1, 0}), 0, 0);  // below, facing up to a shooter facing down
+  const Shooter down = Shooter::from_normal(Vec3(0), Vec3(0, 0, -2));
+  Shooter by_hand;
+  by_hand.normal = Vec3(0, 0, -1);  // tangent and bitangent left at the +z defaults
+  Shooter far = down;
+  far.centre.x = std::numeric_limits<double>::infinity();
+  for (const std::string& name : backend_names()) {
+    auto backend = make_backend(name, {.resolution = 64});
+    std::vector<double> out(view.size(), 0.0), short_out(view.size() - 1, 0.0);
+    EXPECT_NO_THROW(backend->compute(down, view, {}, out)) << name;
+    EXPECT_GT(out[0], 0.0) << name;
+    EXPECT_THROW(backend->compute(by_hand, view, {}, out), Error) << name;
+    EXPECT_THROW(backend->compute(far, view, {}, out), Error) << name;
+    EXPECT_THROW(backend->compute(down, view, {}, short_out), Error) << name;
+  }
+  EXPECT_THROW(Shooter::from_normal(Vec3(0), Vec3(0)), Error);
+  EXPECT_THROW(Shooter::from_normal(Vec3(0), Vec3(std::nan(""), 0, 1)), Error);
 }
 
 }  // namespace
