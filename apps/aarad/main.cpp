@@ -59,7 +59,8 @@ int run(int argc, char** argv) {
     // Out of memory is an internal error too (exit code 3), said in words.
     std::fprintf(stderr,
                  "aarad: internal error: out of memory (std::bad_alloc); fewer elements (a larger --element-size, "
-                 "--min-area or a lower --max-level) or smaller images (--width, --height) need less\n");
+                 "--min-area or a lower --max-level), smaller images (--width, --height) or a lower hemicube "
+                 "--resolution need less\n");
     return 3;
   } catch (const std::exception& e) {
     // Anything else (a bug) is an internal error: exit code 3 (docs/solver.md).
