@@ -87,8 +87,8 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     const std::uint32_t receiver = i;
     const std::uint32_t surface = receivers.surface(i);
     // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is taken at one point of the
-    // pixel (its centre moved into the receiver's bounding box) and 1/depth is affine, so over the pixel it stays
-    // within |alpha| + |beta| of that value. One bound per receiver, rounded up into a float.
+    // pixel (its centre; docs/form-factors.md, "Depth kept per receiver and pixel") and 1/depth is affine, so over
+    // the pixel it stays within |alpha| + |beta| of that value. One bound per receiver, rounded up into a float.
     const double reach = std::abs(depth.alpha) + std::abs(depth.beta);
     float spread = static_cast<float>(reach);
     // One float up (a non-negative finite float's next is its bit pattern plus one: std::nextafter toward
@@ -99,10 +99,17 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that
       // the walk's fractions refer to the area receivers can cover there.
       if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
-      const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
-      double inverse_depth = depth.at(px, py);
-      if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
-      if (inverse_depth > box.hi) inverse_depth = box.hi;
+      // 1/depth of the receiver's plane on the ray through the pixel centre, where every piece of one plane
+      // agrees and other planes are met along the same ray. Where that ray meets the plane behind the shooter (a
+      // grazing plane extrapolated past the receiver), at the centre moved into the receiver's box, clamped into
+      // its vertices' range.
+      double inverse_depth = depth.at(x + 0.5, y + 0.5);
+      if (!(inverse_depth > 0.0)) {
+        const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
+        inverse_depth = depth.at(px, py);
+        if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
+        if (inverse_depth > box.hi) inverse_depth = box.hi;
+      }
       // Key -1/depth orders like the depth without a division.
       ++offered;
       arena.insert(x, y, CoverageEntry{-inverse_depth, coverage, receiver, surface, spread});
