@@ -17,7 +17,9 @@ double polygon_form_factor(const Vec3& point, const Vec3& normal, std::span<cons
   Vec3 r0 = polygon[m - 1] - point;
   for (std::size_t i = 0; i < m; ++i) {
     const Vec3 r1 = polygon[i] - point;
-    const Vec3 c = glm::cross(r1, r0);  // R_{i+1} x R_i
+    // R_{i+1} x R_i, as (v_{i+1} - v_i) x R_i: the same vector, without the cancellation of two nearly parallel
+    // long vectors (a receiver small against its distance: at 1e-8 of it the direct product was noise).
+    const Vec3 c = glm::cross(polygon[i] - polygon[i == 0 ? m - 1 : i - 1], r0);
     const double len = glm::length(c);
     if (len > 0.0) {
       const double gamma = std::atan2(len, glm::dot(r0, r1));
