@@ -107,7 +107,8 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
   EXPECT_GT(report["elements"].get<long long>(), 0);
 }
 
-// `aarad solve cornell` writing 1024 x 1024 images (about 0.3 s after mesh.ply) into `out`, as a child process
+// `aarad solve cornell` writing 2048 x 2048 images (about 1.2 s of writing, so that a Ctrl-C sent when mesh.ply
+// appears arrives while the images are written, even on a busy machine) into `out`, as a child process
 // whose stderr the test reads through a pipe (stdout goes to /dev/null).
 struct WritingChild {
   pid_t pid = -1;
@@ -125,8 +126,8 @@ struct WritingChild {
       close(stderr_pipe[0]);
       close(stderr_pipe[1]);
       if (std::freopen("/dev/null", "w", stdout) == nullptr) _exit(126);
-      execl(binary.c_str(), binary.c_str(), "solve", "cornell", "--max-shots", "3", "--width", "1024", "--height",
-            "1024", "--out", out.c_str(), static_cast<char*>(nullptr));
+      execl(binary.c_str(), binary.c_str(), "solve", "cornell", "--max-shots", "3", "--width", "2048", "--height",
+            "2048", "--out", out.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
     close(stderr_pipe[1]);
@@ -203,7 +204,7 @@ TEST(SolverInterrupt, SigintWhileWritingLetsEveryFileBeWrittenAndExits130) {
   EXPECT_EQ(names_in(out), (std::set<std::string>{"mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr",
                                                   "report.json"}));
   for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
-    expect_whole_image(out / image, 1024);
+    expect_whole_image(out / image, 2048);
   }
   std::ifstream in(out / "report.json");
   const nlohmann::json report = nlohmann::json::parse(in);
@@ -237,7 +238,7 @@ TEST(SolverInterrupt, ASecondSigintWhileWritingStopsAfterTheFileBeingWrittenAndL
   EXPECT_EQ(names.count("report.json"), 0u);
   EXPECT_EQ(names.count("mesh.ply"), 1u);
   for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
-    if (names.count(image) != 0) expect_whole_image(out / image, 1024);
+    if (names.count(image) != 0) expect_whole_image(out / image, 2048);
   }
   fs::remove_all(out);
 }
