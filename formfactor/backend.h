@@ -59,7 +59,7 @@ class FormFactorBackend {
     return false;
   }
   // Adds what keep_unoccluded asked the last compute() to keep to out[i] (out.size() == receivers.size()), for the
-  // receivers of its subset (others may get nothing: a subset's compute() skips what cannot touch it). The
+  // receivers of its subset (others may get nothing or a part: a subset's compute() skips what cannot touch it). The
   // ratio of compute()'s factor to this one is the fraction of the receiver the back end saw, free of the back
   // end's own discretisation error (refine/near_field.h uses it). Returns false, adding nothing, when the back end
   // does not keep it.
