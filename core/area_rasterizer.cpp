@@ -57,14 +57,19 @@ int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
 
 }  // namespace
 
-AreaRasterizer::AreaRasterizer(int width, int height)
-    : width_(width), height_(height) {
+AreaRasterizer::AreaRasterizer(int width, int height) : width_(width), height_(height) { set_viewport(width, height); }
+
+void AreaRasterizer::set_viewport(int width, int height) {
   if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
     throw Error("AreaRasterizer: viewport " + std::to_string(width) + " x " + std::to_string(height) +
                 " is out of range; use a width and height between 1 and " + std::to_string(kMaxSide));
-  // Sized for a polygon covering the whole viewport; each polygon packs its bounding box at the start.
-  cells_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 1), Cell{});
-  columns_.assign(static_cast<std::size_t>(width), Column{});
+  width_ = width;
+  height_ = height;
+  // Sized for a polygon covering the whole viewport; each polygon packs its bounding box at the start. Every cell
+  // and column is back to zero after each polygon, so growing with zeros keeps them all zero.
+  const std::size_t cells = static_cast<std::size_t>(width) * static_cast<std::size_t>(height + 1);
+  if (cells_.size() < cells) cells_.resize(cells, Cell{});
+  if (columns_.size() < static_cast<std::size_t>(width)) columns_.resize(static_cast<std::size_t>(width), Column{});
 }
 
 RasterResult AreaRasterizer::rasterize_into(std::span<const Vec2> polygon, std::span<double> image) {

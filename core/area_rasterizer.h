@@ -47,6 +47,10 @@ class AreaRasterizer {
   int width() const { return width_; }
   int height() const { return height_; }
 
+  // Makes the viewport width x height (as the constructor's; throws the same way), keeping the scratch buffers:
+  // they grow to the largest viewport set and never shrink, so one rasterizer serves viewports of many sizes.
+  void set_viewport(int width, int height);
+
   // Scan-converts a simple polygon (vertices in pixel units, either winding, first vertex not repeated),
   // clipped exactly to the viewport, and calls visit(x, y, coverage) once for every pixel with
   // coverage > kCoverageFloor: column by column (x increasing), inside a column y decreasing, over the

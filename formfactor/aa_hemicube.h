@@ -16,9 +16,9 @@
 // other whatever rounding does to their planes.
 //
 // Parallel over six tasks: the top face cut into its left and right column halves, and the four side faces, so
-// that every task has as many pixels as a side face and two threads share the work evenly (one arena per
-// thread, one rasterizer per task and thread), started largest first (run_face_tasks). The per-task partial sums
-// are added in task order, so the numbers do not depend on the number of threads.
+// that every task has as many pixels as a side face and two threads share the work evenly (one arena and one
+// rasterizer per thread, set to each task's viewport), started largest first (run_face_tasks). The per-task
+// partial sums are added in task order, so the numbers do not depend on the number of threads.
 #pragma once
 
 #include "core/area_rasterizer.h"
@@ -54,7 +54,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
  private:
   static constexpr int kTasks = kFaceTasks;
   struct FaceBuffers {
-    std::array<std::unique_ptr<AreaRasterizer>, kTasks> raster;  // per task: its width x height viewport
+    std::unique_ptr<AreaRasterizer> raster;  // set to each task's width x height viewport in turn
     StagedCoverageArena arena;
     std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
     std::vector<Vec2> projected;
@@ -66,8 +66,9 @@ class AaHemicubeBackend final : public FormFactorBackend {
                   std::span<double> sums, UnoccludedList& unoccluded);
 
   HemicubeGeometry geometry_;
-  // Delta form factors of every face in the arena's column-major order (pixel (x, y) at x * height + y).
-  std::array<std::vector<double>, kHemicubeFaces> column_weight_;
+  // Delta form factors of the top face [0] and of the side faces [1] in the arena's column-major order (pixel
+  // (x, y) at x * height + y).
+  std::array<std::vector<double>, 2> column_weight_;
   PreparedReceivers prepared_;
   std::array<FaceTask, kTasks> tasks_;
   TaskSums sums_;

@@ -40,7 +40,7 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
   auto height_node = [n](int r) { return std::min(1.0, static_cast<double>(2 * r) / n); };
 
   // Top face.
-  std::vector<double>& top = delta_[0];
+  std::vector<double>& top = top_;
   top.assign(static_cast<std::size_t>(n) * n, 0.0);
   if (rule == DeltaRule::kExactCell) {
     std::vector<double> corner(static_cast<std::size_t>(n + 1) * (n + 1));
@@ -61,8 +61,9 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
     }
   }
 
-  // Side faces: identical tables (the four faces are congruent), row r = height above the base.
-  std::vector<double> side(static_cast<std::size_t>(n) * side_rows_, 0.0);
+  // Side faces: one table (the four faces are congruent), row r = height above the base.
+  std::vector<double>& side = side_;
+  side.assign(static_cast<std::size_t>(n) * side_rows_, 0.0);
   if (rule == DeltaRule::kExactCell) {
     std::vector<double> corner(static_cast<std::size_t>(n + 1) * (side_rows_ + 1));
     for (int r = 0; r <= side_rows_; ++r)
@@ -81,9 +82,6 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
         side[static_cast<std::size_t>(r) * n + i] = z * cell * dz / (kPi * q * q);
       }
     }
-  }
-  for (int f = 1; f < kHemicubeFaces; ++f) {
-    delta_[static_cast<std::size_t>(f)] = side;
   }
 }
 

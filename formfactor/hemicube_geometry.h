@@ -78,7 +78,7 @@ class HemicubeGeometry {
   }
   // Delta form factor of every pixel of a face, row y at offset y * width: the form factor of the part of the
   // pixel inside the face. The five tables sum to 1 (kExactCell) or to 1 + O(1 / N^2) (kMidpoint).
-  std::span<const double> delta(HemicubeFace face) const { return delta_[index(face)]; }
+  std::span<const double> delta(HemicubeFace face) const { return face == HemicubeFace::kTop ? top_ : side_; }
   // y (pixel units) at which the classical hemicube samples row `row` of a face: row + 1/2, or the centre of
   // the inside half for the half row.
   double sample_y(HemicubeFace face, int row) const {
@@ -89,11 +89,11 @@ class HemicubeGeometry {
   double total() const;
 
  private:
-  static std::size_t index(HemicubeFace face) { return static_cast<std::size_t>(face); }
   int resolution_;
   int side_rows_;
   double half_row_sample_y_;
-  std::array<std::vector<double>, kHemicubeFaces> delta_;
+  // The top face's table and the side faces' one: the four side faces are congruent, so one table serves them.
+  std::vector<double> top_, side_;
 };
 
 // The w of to_local for a point the floating-point filter could not sign (w: that unsure value), with its sign

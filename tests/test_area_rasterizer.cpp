@@ -259,6 +259,32 @@ void random_exact_test(Shape shape, std::uint64_t seed, int count, double snap, 
 
 // ---- Exact coverage on seeded random polygons ----------------------------------------------------------
 
+// One rasterizer serves viewports of several sizes (the AA hemicube keeps one per thread and sets it to each
+// face task's viewport): after larger and smaller viewports, every polygon's pixels are those of a rasterizer
+// made for its viewport, bit for bit, clipping at the new borders included.
+TEST(AreaRasterizer, raster_set_viewport_matches_a_fresh_rasterizer) {
+  Random random(424242);
+  AreaRasterizer shared(8, 8);
+  const std::pair<int, int> viewports[] = {{64, 32}, {16, 48}, {100, 100}, {7, 5}, {64, 32}, {1, 1}, {33, 17}};
+  for (const auto& [width, height] : viewports) {
+    shared.set_viewport(width, height);
+    EXPECT_EQ(shared.width(), width);
+    EXPECT_EQ(shared.height(), height);
+    AreaRasterizer fresh(width, height);
+    for (int k = 0; k < 50; ++k) {
+      // Polygons around the viewport, many crossing its borders.
+      const Vec2 centre(random.uniform(-4.0, width + 4.0), random.uniform(-4.0, height + 4.0));
+      const std::vector<Vec2> polygon =
+          k % 2 == 0 ? random_convex(random, centre, random.uniform(0.3, 30.0)) : random_star(random, centre, 12.0);
+      std::vector<double> a(static_cast<std::size_t>(width * height), 0.0), b = a;
+      shared.rasterize_into(polygon, a);
+      fresh.rasterize_into(polygon, b);
+      ASSERT_EQ(a, b) << width << " x " << height << ", polygon " << k;
+    }
+  }
+  EXPECT_THROW(shared.set_viewport(0, 4), Error);
+}
+
 TEST(AreaRasterizer, raster_convex_matches_exact) {
   int checked = 0;
   random_exact_test(Shape::kConvex, 20240601, 3000, 0.0, checked);
