@@ -303,15 +303,16 @@ Scene make_office() {
   }
 
   // The pedestal table: a 24-sided top 1.2 m across with a 4 cm edge band, an octagonal column and a
-  // 16-sided base with a bottom, a closed solid standing on the floor.
+  // 16-sided base with a bottom, a closed solid standing on the floor. The sides of the three prisms stand for
+  // round surfaces: each prism is a smoothing group, shaded smoothly around in the images.
   const double tx = 2.5, tz = 3.2;
   const std::uint32_t table = scene.add_group("table");
   scene.add_face(table, wood, disk(tx, tz, 0.6, 0.75, 24, true));
   scene.add_face(table, wood, disk(tx, tz, 0.6, 0.71, 24, false));
-  for (auto& q : prism_sides(tx, tz, 0.6, 0.71, 0.75, 24)) scene.add_face(table, wood, std::move(q));
-  for (auto& q : prism_sides(tx, tz, 0.05, 0.04, 0.71, 8)) scene.add_face(table, wood, std::move(q));
+  for (auto& q : prism_sides(tx, tz, 0.6, 0.71, 0.75, 24)) scene.add_face(table, wood, std::move(q), 0, 1);
+  for (auto& q : prism_sides(tx, tz, 0.05, 0.04, 0.71, 8)) scene.add_face(table, wood, std::move(q), 0, 2);
   scene.add_face(table, wood, disk(tx, tz, 0.3, 0.04, 16, true));
-  for (auto& q : prism_sides(tx, tz, 0.3, 0.0, 0.04, 16)) scene.add_face(table, wood, std::move(q));
+  for (auto& q : prism_sides(tx, tz, 0.3, 0.0, 0.04, 16)) scene.add_face(table, wood, std::move(q), 0, 3);
   scene.add_face(table, wood, disk(tx, tz, 0.3, 0.0, 16, false));
 
   // Three chairs around the table, facing it. In a chair's own frame the sitter faces +z: a 46 x 46 cm

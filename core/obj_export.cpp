@@ -86,6 +86,7 @@ std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const
       }
 
   const std::vector<std::string> materials = material_names(scene);
+  std::uint32_t smoothing = 0;  // `s` holds until the next `s`, across `o` lines; a file starts with it off
   for (const Group& g : scene.groups) {
     if (g.faces.empty()) continue;
     out << "o " << g.name << "\n";
@@ -95,6 +96,10 @@ std::string obj_text(const Scene& scene, const std::string& mtl_file_name, const
       if (material != f.material) {
         material = f.material;
         out << "usemtl " << materials[f.material] << "\n";
+      }
+      if (smoothing != f.smoothing) {
+        smoothing = f.smoothing;
+        out << "s " << (smoothing == 0 ? std::string("off") : std::to_string(smoothing)) << "\n";
       }
       out << "f";
       for (const std::size_t i : face_indices[fi]) out << " " << i;

@@ -297,6 +297,15 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
         text.face_lines.push_back(number);
         text.face_sizes.push_back(t.size() - 1);
       }
+    } else if (key == "s") {
+      // `s N` (a whole number; 0 is off) or `s off`.
+      const bool off = t.size() == 2 && t[1] == "off";
+      const bool group = t.size() == 2 && t[1].size() <= 9 &&
+                         std::all_of(t[1].begin(), t[1].end(), [](char c) { return c >= '0' && c <= '9'; });
+      if (!off && !group)
+        warnings.push_back(InputError::format(path, number, "smoothing statement '" + trim(line) + "' not "
+                                                            "understood; write 's N' with a whole number N below "
+                                                            "1e9, or 's off'"));
     } else if (key == "mtllib") {
       for (std::size_t i = 1; i < t.size(); ++i) text.material_libraries.emplace_back(number, t[i]);
     } else if (key == "usemtl") {
@@ -630,6 +639,7 @@ Scene import_obj(const std::string& obj_path) {
         continue;
       }
       const int parsed_material = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
+      const std::uint32_t smoothing = f < shape.mesh.smoothing_group_ids.size() ? shape.mesh.smoothing_group_ids[f] : 0;
       std::uint32_t material;
       if (parsed_material >= 0 && static_cast<std::size_t>(parsed_material) < material_index.size()) {
         material = material_index[static_cast<std::size_t>(parsed_material)];
@@ -649,7 +659,7 @@ Scene import_obj(const std::string& obj_path) {
           continue;
         }
         if (!group) group = scene.add_group(group_name);
-        scene.add_face(*group, material, polygon, line);
+        scene.add_face(*group, material, polygon, line, smoothing);
       }
     }
   }

@@ -37,12 +37,14 @@ std::uint32_t Scene::add_material(const Material& material) {
   return static_cast<std::uint32_t>(materials.size() - 1);
 }
 
-void Scene::add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line) {
+void Scene::add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line,
+                     std::uint32_t smoothing) {
   Face face;
   face.vertices = std::move(vertices);
   face.group = group;
   face.material = material;
   face.source_line = source_line;
+  face.smoothing = smoothing;
   faces.push_back(std::move(face));
   groups[group].faces.push_back(static_cast<std::uint32_t>(faces.size() - 1));
 }
@@ -60,7 +62,7 @@ void Scene::build_surfaces() {
       std::optional<std::uint32_t> match;
       for (const std::uint32_t si : group.surfaces) {
         const Surface& s = surfaces[si];
-        if (s.material != face.material) continue;
+        if (s.material != face.material || s.smoothing != face.smoothing) continue;
         if (glm::dot(s.plane.normal, plane.normal) < 1.0 - kNormalDotTolerance) continue;
         const bool in_plane = std::all_of(face.vertices.begin(), face.vertices.end(), [&](const Vec3& v) {
           return std::abs(s.plane.signed_distance(v)) <= tolerance;
@@ -74,6 +76,7 @@ void Scene::build_surfaces() {
         Surface s;
         s.group = gi;
         s.material = face.material;
+        s.smoothing = face.smoothing;
         s.plane = plane;
         surfaces.push_back(s);
         match = static_cast<std::uint32_t>(surfaces.size() - 1);

@@ -39,6 +39,10 @@ struct Face {
   std::uint32_t material = 0;
   std::uint32_t surface = 0;  // index into Scene::surfaces
   int source_line = 0;        // line in the OBJ file, 0 for built-in geometry
+  // OBJ smoothing group (`s N`; 0 for `s off` or none). Faces of one group (`o`/`g`) with the same nonzero
+  // smoothing group are pieces of one curved surface: smooth.png and the PLY's vertex colours interpolate
+  // across their shared edges (mesh/display.h). It changes no radiosity.
+  std::uint32_t smoothing = 0;
 };
 
 // A named OBJ group ("o" or "g"); it holds one or more physical surfaces.
@@ -48,11 +52,12 @@ struct Group {
   std::vector<std::uint32_t> surfaces;
 };
 
-// The faces of one group that lie in one plane and share one material. Pieces of one physical surface
-// never occlude each other (the paper's identical-z exception, section 3.2.1).
+// The faces of one group that lie in one plane and share one material and smoothing group. Pieces of one
+// physical surface never occlude each other (the paper's identical-z exception, section 3.2.1).
 struct Surface {
   std::uint32_t group = 0;
   std::uint32_t material = 0;
+  std::uint32_t smoothing = 0;  // the faces' smoothing group (Face::smoothing)
   Plane plane;  // the front side is the lit side
   std::vector<std::uint32_t> faces;
   double area = 0.0;
@@ -86,14 +91,16 @@ class Scene {
   std::vector<std::string> warnings;  // what import fixed or skipped, each naming file and line
 
   // add_group returns the index of the group named `group_name`, creating it on first use; add_face adds
-  // a face to group index `group` with material index `material`. The face's surface is assigned by
-  // build_surfaces().
+  // a face to group index `group` with material index `material` and smoothing group `smoothing` (0: none).
+  // The face's surface is assigned by build_surfaces().
   std::uint32_t add_group(const std::string& group_name);
   std::uint32_t add_material(const Material& material);
-  void add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line = 0);
+  void add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line = 0,
+                std::uint32_t smoothing = 0);
 
   // Groups faces into physical surfaces (same group, same plane within a tolerance relative to the scene
-  // size, same material) and fills Surface::area and Group::surfaces. Call after the last add_face.
+  // size, same material, same smoothing group) and fills Surface::area and Group::surfaces. Call after the
+  // last add_face.
   void build_surfaces();
 
   // Checks what every consumer relies on: at least one face, materials with rho in [0, 1) and emission in

@@ -7,6 +7,9 @@
 #include "mesh/leaf_mesh.h"
 
 #include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <tuple>
 
 namespace aarad::mesh {
 namespace {
@@ -22,6 +25,69 @@ void loop_from_first_corner(const Hierarchy::Impl& m, NodeId leaf, std::vector<i
   std::rotate(loop.begin(), first, loop.end());
 }
 
+// A hanging vertex lies on the edge between two corners of a leaf (its host edge), at parameter t; a corner
+// of every leaf around it has a = -1.
+struct Host {
+  int a = -1, b = -1;
+  double t = 0.0;
+};
+
+// Smoothing groups (Scene's Face::smoothing): corner vertices of different surfaces of one scene group and one
+// nonzero smoothing group that lie at one point, within the distance at which the initial meshing joins
+// vertices, pool their leaves' areas and values, so that each of them takes the area-weighted mean of all the
+// leaves around the point and the display is continuous across the edges between those surfaces. Hanging
+// vertices keep their host edge's interpolation (a surface's outer boundary has none).
+void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
+                            std::span<const Host> host, std::vector<Rgb>& weighted, std::vector<double>& weight) {
+  struct Candidate {
+    std::uint32_t group, smoothing;
+    Vec3 p;
+    int vertex;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t v = 0; v < vertex_surface.size(); ++v) {
+    if (!(weight[v] > 0.0) || host[v].a >= 0) continue;
+    const Surface& surface = m.scene.surfaces[vertex_surface[v]];
+    if (surface.smoothing != 0)
+      candidates.push_back({surface.group, surface.smoothing, m.point(static_cast<int>(v)), static_cast<int>(v)});
+  }
+  if (candidates.empty()) return;
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return std::tie(a.group, a.smoothing, a.p.x, a.vertex) < std::tie(b.group, b.smoothing, b.p.x, b.vertex);
+  });
+  // Union-find over the candidates; pairs are found by a sweep along x.
+  std::vector<std::size_t> root(candidates.size());
+  std::iota(root.begin(), root.end(), std::size_t{0});
+  const auto find = [&](std::size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  const double tolerance = kPlaneDistance * m.scene.diagonal();
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const Candidate& a = candidates[i];
+    for (std::size_t j = i + 1; j < candidates.size(); ++j) {
+      const Candidate& b = candidates[j];
+      if (b.group != a.group || b.smoothing != a.smoothing || b.p.x - a.p.x > tolerance) break;
+      if (std::abs(b.p.y - a.p.y) <= tolerance && std::abs(b.p.z - a.p.z) <= tolerance &&
+          vertex_surface[static_cast<std::size_t>(a.vertex)] != vertex_surface[static_cast<std::size_t>(b.vertex)])
+        root[find(j)] = find(i);
+    }
+  }
+  // Sums per class, in candidate order (deterministic), then given to every member.
+  std::vector<Rgb> class_weighted(candidates.size());
+  std::vector<double> class_weight(candidates.size(), 0.0);
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const auto v = static_cast<std::size_t>(candidates[i].vertex);
+    class_weighted[find(i)] += weighted[v];
+    class_weight[find(i)] += weight[v];
+  }
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const auto v = static_cast<std::size_t>(candidates[i].vertex);
+    weighted[v] = class_weighted[find(i)];
+    weight[v] = class_weight[find(i)];
+  }
+}
+
 }  // namespace
 
 DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> node_values) {
@@ -30,12 +96,9 @@ DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> 
   const std::vector<NodeId> leaves = hierarchy.leaves();
 
   // Hanging vertices: a loop vertex that is not a corner of the leaf lies on the edge between the corners
-  // around it (its host edge), at parameter t.
-  struct Host {
-    int a = -1, b = -1;
-    double t = 0.0;
-  };
+  // around it (its host edge).
   std::vector<Host> host(vertex_count);
+  std::vector<std::uint32_t> vertex_surface(vertex_count);
   std::vector<Rgb> weighted(vertex_count);
   std::vector<double> weight(vertex_count, 0.0);
   std::vector<int> loop;
@@ -57,8 +120,10 @@ DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> 
       const auto v = static_cast<std::size_t>(m.corners[leaf][static_cast<std::size_t>(c)]);
       weighted[v] += node_values[leaf] * m.area[leaf];
       weight[v] += m.area[leaf];
+      vertex_surface[v] = m.surface[leaf];
     }
   }
+  pool_smoothed_vertices(m, vertex_surface, host, weighted, weight);
 
   // Resolve values; a hanging vertex's host corners may hang on a coarser leaf themselves (nested), so
   // resolve depth first. Host edges belong to strictly larger leaves, so the recursion ends.

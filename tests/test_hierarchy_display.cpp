@@ -23,6 +23,7 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -105,6 +106,54 @@ TEST(HierarchyDisplay, HangingVertexTakesTheInterpolationAlongItsHostEdge) {
   // L has five loop vertices: a fan of five triangles from its centre; R's children two each.
   EXPECT_EQ(d.triangles.size(), 5u + 4u * 2u);
   expect_crack_free(h, d);
+}
+
+// Two unit squares bent along their shared edge x = 1: A in z = 0 with B = 1, B rising to z = 0.3 with B = 3
+// (area sqrt(1.09)). With one smoothing group in one scene group the two copies of each shared corner take the
+// area-weighted mean of both leaves, (1 + 3 sqrt(1.09)) / (1 + sqrt(1.09)); the outer corners keep 1 and 3.
+// Without smoothing, with two smoothing groups, or with the squares in two scene groups, each copy keeps its
+// own surface's value.
+TEST(HierarchyDisplay, SmoothingGroupsPoolTheCornersSharedAcrossSurfaces) {
+  struct Case {
+    const char* what;
+    std::uint32_t smoothing_a, smoothing_b;
+    bool two_groups;
+    bool pooled;
+  };
+  for (const Case c : {Case{"one smoothing group", 1, 1, false, true}, Case{"no smoothing", 0, 0, false, false},
+                       Case{"two smoothing groups", 1, 2, false, false}, Case{"two scene groups", 1, 1, true, false}}) {
+    SCOPED_TRACE(c.what);
+    Scene scene;
+    scene.name = "bent";
+    const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+    const std::uint32_t first = scene.add_group("a"), second = c.two_groups ? scene.add_group("b") : first;
+    scene.add_face(first, grey, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, 0, c.smoothing_a);
+    scene.add_face(second, grey, {{1, 0, 0}, {2, 0, 0.3}, {2, 1, 0.3}, {1, 1, 0}}, 0, c.smoothing_b);
+    scene.build_surfaces();
+    ASSERT_EQ(scene.surfaces.size(), 2u);
+    const Hierarchy h(scene, sizes(2.0, 2.0));
+    ASSERT_EQ(h.leaves().size(), 2u);  // each square one element
+    std::vector<Rgb> values(h.node_count());
+    for (const NodeId leaf : h.leaves()) values[leaf] = Rgb(h.surface(leaf) == 0 ? 1.0 : 3.0);
+    const DisplayMesh d = build_display_mesh(h, values);
+    const double b_area = std::sqrt(1.09), pooled = (1.0 + 3.0 * b_area) / (1.0 + b_area);
+    std::vector<double> own(d.positions.size(), 0.0);  // each vertex's own surface's value, from its triangles
+    for (std::size_t t = 0; t < d.triangles.size(); ++t)
+      for (const std::uint32_t v : d.triangles[t]) own[v] = values[d.triangle_leaf[t]].r;
+    int shared_copies = 0;
+    for (std::size_t v = 0; v < d.positions.size(); ++v) {
+      const Vec3& p = d.positions[v];
+      ASSERT_NE(own[v], 0.0) << "vertex " << v << " in no triangle";
+      if (p.x == 1.0) {
+        ++shared_copies;
+        EXPECT_NEAR(d.vertex_values[v].r, c.pooled ? pooled : own[v], 1e-15) << "vertex " << v;
+      } else {
+        EXPECT_EQ(d.vertex_values[v].r, own[v]) << "vertex " << v;
+      }
+    }
+    EXPECT_EQ(shared_copies, 4);  // (1, 0, 0) and (1, 1, 0), once per surface
+    expect_crack_free(h, d);
+  }
 }
 
 TEST(HierarchyDisplay, NestedHangingVerticesInterpolateRecursively) {

@@ -501,6 +501,45 @@ TEST_F(SceneImport, import_coplanar_faces_of_a_group_form_one_surface) {
     for (const std::uint32_t f : scene.surfaces[s].faces) EXPECT_EQ(scene.faces[f].surface, s);
 }
 
+// `s N` and `s off` set the smoothing group of the faces after them (Face::smoothing), across `o` lines as OBJ
+// readers do; coplanar faces in two smoothing groups are two surfaces; a statement that is neither a whole number
+// nor `off` warns with its line; write_obj writes the groups back.
+TEST_F(SceneImport, import_smoothing_groups_are_read_per_face_and_written_back) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("smooth.obj",
+                                "mtllib s.mtl\nusemtl grey\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0.5\nv 2 1 0.5\nv 3 0 0\nv 3 1 0\n"  // 1-8
+                                "v 0 2 0\nv 1 2 0\nv 0 3 0\nv 1 3 0\nv 0 4 0\nv 1 4 0\n"                     // 9-14
+                                "v 3 0 1\nv 3 1 1\nv 3 0 2\nv 3 1 2\n"                                          // 15-18
+                                "o bent\n"
+                                "s 1\nf 1 2 3 4\nf 2 5 6 3\n"  // lines 23-24: group 1
+                                "s off\nf 5 7 8 6\n"           // none
+                                "o flat\n"
+                                "f 4 3 10 9\n"                  // still off
+                                "s 2\nf 9 10 12 11\n"          // group 2, coplanar with the face before
+                                "o later\n"
+                                "f 11 12 14 13\n"               // group 2 holds across `o`
+                                "s 0\nf 7 15 16 8\n"           // 0 is off
+                                "s smooth\nf 15 17 18 16\n");  // line 35 warns
+  const Scene scene = import_obj(obj);
+  std::vector<std::uint32_t> smoothing;
+  for (const Face& f : scene.faces) smoothing.push_back(f.smoothing);
+  EXPECT_EQ(smoothing, (std::vector<std::uint32_t>{1, 1, 0, 0, 2, 2, 0, 0}));
+  ASSERT_FALSE(scene.warnings.empty());
+  EXPECT_TRUE(has_warning(scene, "smooth.obj:35: smoothing statement 's smooth' not understood")) << scene.warnings.front();
+  EXPECT_EQ(scene.warnings.size(), 2u) << scene.warnings.back();  // and "no face emits light"
+  const Group& flat = scene.groups[*scene.find_group("flat")];
+  ASSERT_EQ(flat.surfaces.size(), 2u);  // one plane, two smoothing groups
+  EXPECT_EQ(scene.surfaces[flat.surfaces[0]].smoothing, 0u);
+  EXPECT_EQ(scene.surfaces[flat.surfaces[1]].smoothing, 2u);
+
+  const std::string path = (dir_ / "back.obj").string();
+  write_obj(scene, path);
+  const Scene back = import_obj(path);
+  ASSERT_EQ(back.faces.size(), scene.faces.size());
+  for (std::size_t f = 0; f < scene.faces.size(); ++f) EXPECT_EQ(back.faces[f].smoothing, scene.faces[f].smoothing) << f;
+}
+
 TEST_F(SceneImport, import_faces_on_one_another_in_one_plane_warn_with_their_lines) {
   write("s.mtl", kSquareMtl);
   const std::string obj = write("rug.obj",
