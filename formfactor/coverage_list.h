@@ -100,10 +100,17 @@ class CoverageWalk {
         const double open = 1.0 - covered_;
         for (std::size_t k = i; k < j; ++k) emit(list[k].receiver, take(list[k].coverage * open));
       } else {
-        // Overlapping in the pixel: the recurrence, one group of one surface at a time.
+        // Overlapping in the pixel: the recurrence, one group of one surface at a time, except that groups of one
+        // plane (the same depth key along the pixel's ray and the same spread: coplanar surfaces, such as two
+        // materials of one floor meeting along an edge) share the f in front of the first of them, the paper's
+        // identical-z exception: they lie side by side, and the recurrence would take A_1 A_2 from the second.
         double open = 0.0;
+        std::size_t head = i;  // the first group of the current run of coplanar groups
         for (std::size_t k = i; k < j; ++k) {
-          if (k == i || list[k].surface != list[k - 1].surface) open = 1.0 - covered_;
+          if (k == i || (list[k].surface != list[k - 1].surface && !same_plane(list[k], list[head]))) {
+            open = 1.0 - covered_;
+            head = k;
+          }
           emit(list[k].receiver, take(list[k].coverage * open));
         }
       }
@@ -117,6 +124,13 @@ class CoverageWalk {
 
  private:
   double take(double share) { return take_share(share, covered_); }
+  // Whether two entries have the key of one plane in the pixel: equal keys (to kLayerTouch, the rounding of two
+  // surfaces' planes computed apart) and equal spreads (to float rounding). Two different planes have equal keys
+  // only where they meet on the pixel's ray, and then equal spreads only by coincidence.
+  static bool same_plane(const CoverageEntry& a, const CoverageEntry& b) {
+    return std::abs(a.depth - b.depth) <= kLayerTouch * std::abs(b.depth) &&
+           std::abs(a.spread - b.spread) <= 1e-6f * std::max(a.spread, b.spread);
+  }
   double covered_ = 0.0;
 };
 

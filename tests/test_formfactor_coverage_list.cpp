@@ -90,6 +90,23 @@ TEST(FormfactorCoverageList, OverlappingRangesThatOverfillThePixelUseTheRecurren
   EXPECT_DOUBLE_EQ(total_visible(apart), 0.6 + 0.4 * 0.4);
 }
 
+TEST(FormfactorCoverageList, CoplanarSurfacesInAnOverfilledLayerShareTheFractionInFront) {
+  // Two surfaces of one plane (two materials of a floor meeting inside the pixel: the same key and spread) and an
+  // occluder whose depth range overlaps theirs; the coverages add up to 1.5, so the layer takes the recurrence. The
+  // coplanar surfaces lie side by side (the paper's identical-z exception): each gets its share of what the occluder
+  // leaves, as one surface cut in two would (before: the second got 0.4 x (1 - 0.5 - 0.3) = 0.08).
+  const std::vector<CoverageEntry> list = {{1.0, 0.5, 0, 7, 2.0f}, {2.0, 0.6, 1, 3, 0.5f}, {2.0, 0.4, 2, 4, 0.5f}};
+  std::vector<double> e(3);
+  const double f = resolve_front_to_back(list, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.5);
+  EXPECT_DOUBLE_EQ(e[1], 0.3);
+  EXPECT_DOUBLE_EQ(e[2], 0.2);
+  EXPECT_DOUBLE_EQ(f, 1.0);
+  // Planes that merely meet on the pixel's ray (equal keys, different spreads) keep the recurrence.
+  const std::vector<CoverageEntry> meeting = {{1.0, 0.5, 0, 7, 2.0f}, {2.0, 0.6, 1, 3, 0.5f}, {2.0, 0.4, 2, 4, 0.7f}};
+  EXPECT_DOUBLE_EQ(total_visible(meeting), 0.5 + 0.3 + 0.4 * (1 - 0.5 - 0.3));
+}
+
 TEST(FormfactorCoverageList, LayersChainThroughOverlappingRanges) {
   // Three pieces of three surfaces, each range overlapping the next (a corner of three walls): one layer.
   const std::vector<CoverageEntry> list = {{1.0, 0.2, 0, 1, 0.3f}, {1.5, 0.3, 1, 2, 0.3f}, {2.0, 0.5, 2, 3, 0.3f},

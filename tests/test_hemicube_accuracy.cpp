@@ -314,6 +314,59 @@ TEST(HemicubeAccuracy, ThinPlateOverACutFloorKeepsItsFormFactor) {
   }
 }
 
+// Coplanar surfaces sharing edges (one plane, several materials: Scene makes each its own physical surface) get the
+// total of one surface cut the same way, also where something else's depth range overlaps theirs and the pixel
+// overfills, so that the walk takes the recurrence: there the surfaces share the f in front of them (the paper's
+// identical-z exception) instead of hiding A_1 A_2 of each other. Before: a checkerboard floor with a block standing
+// on it lost 2.8e-4 (0.04 %) to the block's base edges, and a floor seen at a grazing angle behind a plate lost 0.18 %.
+TEST(HemicubeAccuracy, CoplanarSurfacesSharingEdgesGetOneSurfacesTotal) {
+  AaHemicubeBackend aa(100);
+  const Plane floor_plane{{0, 1, 0}, 0};
+  {  // A 32 x 32 checkerboard of two surfaces, a block standing on it (no bottom face), seen from above one corner.
+    const Shooter s = Shooter::from_normal(Vec3(1.3, 0.9, 1.1), glm::normalize(Vec3(-0.5, -1, -0.4)));
+    double floor_total[2] = {0, 0}, block_total[2] = {0, 0};
+    for (int checker = 0; checker < 2; ++checker) {
+      ReceiverView view;
+      const int n = 32;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const double x0 = -2 + 4.0 * i / n, z0 = -2 + 4.0 * j / n, d = 4.0 / n;
+          view.add(Polygon{{x0, 0, z0}, {x0, 0, z0 + d}, {x0 + d, 0, z0 + d}, {x0 + d, 0, z0}}, floor_plane,
+                   checker != 0 ? static_cast<std::uint32_t>((i + j) % 2) : 0u, static_cast<std::uint32_t>(view.size()));
+        }
+      const std::size_t floor_count = view.size();
+      const Vec3 lo(-0.37, 0, -0.29), hi(0.41, 0.5, 0.33), d = hi - lo;
+      const std::vector<Polygon> block = {
+          rectangle({lo.x, hi.y, lo.z}, {0, 0, d.z}, {d.x, 0, 0}), rectangle(lo, {0, d.y, 0}, {0, 0, d.z}),
+          rectangle({hi.x, lo.y, lo.z}, {0, 0, d.z}, {0, d.y, 0}), rectangle(lo, {d.x, 0, 0}, {0, d.y, 0}),
+          rectangle({lo.x, lo.y, hi.z}, {0, d.y, 0}, {d.x, 0, 0})};
+      for (std::uint32_t k = 0; k < block.size(); ++k) add(view, block[k], 10 + k, 5000 + k);
+      const std::vector<double> f = run(aa, s, view);
+      for (std::size_t i = 0; i < f.size(); ++i) (i < floor_count ? floor_total : block_total)[checker] += f[i];
+    }
+    EXPECT_NEAR(floor_total[1], floor_total[0], 1e-12) << "checkerboard floor";
+    EXPECT_NEAR(block_total[1], block_total[0], 1e-12) << "block on the checkerboard";
+  }
+  {  // A floor seen at a grazing angle behind a thin plate, whole and cut into two surfaces across the line of sight.
+    const Shooter s = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
+    const double h = 0.01, cut = 0.1234;
+    const Polygon whole = rectangle({-1, -h, 0.1}, {0, 0, 2.9}, {2, 0, 0});
+    const Polygon left = rectangle({-1, -h, 0.1}, {0, 0, 2.9}, {1 + cut, 0, 0});
+    const Polygon right = rectangle({cut, -h, 0.1}, {0, 0, 2.9}, {1 - cut, 0, 0});
+    const Polygon plate = rectangle({-0.3, -0.0099, 0.3}, {0, 0.0049, 0}, {0.6, 0, 0});
+    const Plane plane = plane_of(whole);
+    ReceiverView one, two;
+    one.add(whole, plane, 0, 0);
+    add(one, plate, 5, 5);
+    two.add(left, plane, 0, 0);
+    two.add(right, plane, 1, 1);
+    add(two, plate, 5, 5);
+    const std::vector<double> a = run(aa, s, one), b = run(aa, s, two);
+    EXPECT_NEAR(b[0] + b[1], a[0], 1e-12 * a[0]) << "grazing floor behind a plate";
+    EXPECT_NEAR(b[2], a[1], 1e-15);
+  }
+}
+
 TEST(HemicubeAccuracy, SubsetStillOccludes) {
   const Shooter up = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
   ReceiverView view;
