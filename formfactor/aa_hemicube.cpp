@@ -89,9 +89,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const std::uint32_t receiver = i;
     const std::uint32_t surface = receivers.surface(i);
-    // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is taken at one point of the
-    // pixel (its centre; docs/form-factors.md, "Depth kept per receiver and pixel") and 1/depth is affine, so over
-    // the pixel it stays within |alpha| + |beta| of that value. One bound per receiver, rounded up into a float.
+    // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is 1/depth of the receiver's plane
+    // at one point of the pixel's closed square (its centre, or the corner nearest the shooter; docs/form-factors.md,
+    // "Depth kept per receiver and pixel") and 1/depth is affine, so over the pixel it stays within |alpha| +
+    // |beta| of that value. One bound per receiver, rounded up into a float.
     const double reach = std::abs(depth.alpha) + std::abs(depth.beta);
     float spread = static_cast<float>(reach);
     // One float up (a non-negative finite float's next is its bit pattern plus one: std::nextafter toward
@@ -103,15 +104,21 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       // the walk's fractions refer to the area receivers can cover there.
       if (y == half_row) coverage = std::min(1.0, 2.0 * coverage);
       // 1/depth of the receiver's plane on the ray through the pixel centre, where every piece of one plane
-      // agrees and other planes are met along the same ray. Where that ray meets the plane behind the shooter (a
-      // grazing plane extrapolated past the receiver), at the centre moved into the receiver's box, clamped into
-      // its vertices' range.
+      // agrees and other planes are met along the same ray.
       double inverse_depth = depth.at(x + 0.5, y + 0.5);
       if (!(inverse_depth > 0.0)) {
-        const double px = std::clamp(x + 0.5, box.x_min, box.x_max), py = std::clamp(y + 0.5, box.y_min, box.y_max);
-        inverse_depth = depth.at(px, py);
-        if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
-        if (inverse_depth > box.hi) inverse_depth = box.hi;
+        // That ray meets the plane behind the shooter, or runs parallel to it (a grazing plane extrapolated past
+        // the receiver, or a receiver close to the shooter crossing its plane): the receiver is seen in another
+        // part of the pixel, where 1/depth is in (0, largest over the pixel]. The largest is at the corner nearest
+        // the shooter, the centre's value + (|alpha| + |beta|) / 2, a function of the plane and the pixel only, so
+        // every piece of one plane gets the same key here too, whichever receiver arrives first (a key taken from
+        // the receiver's own box, as before, placed pieces of one plane at different depths, which made the
+        // result depend on the receivers' order). It is the receiver's nearest possible depth in the pixel, the
+        // one a nearer full entry must beat to hide it, and it stays within the spread of every 1/depth the
+        // receiver has in the pixel (those lie in [largest - reach, largest]). Where rounding leaves it <= 0 the
+        // plane is seen at infinity: key 0, still within the spread.
+        inverse_depth += 0.5 * reach;
+        if (!(inverse_depth > 0.0)) inverse_depth = 0.0;
       }
       // Key -1/depth orders like the depth without a division.
       ++offered;

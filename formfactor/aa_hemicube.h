@@ -5,13 +5,14 @@
 // list front to back, a receiver gets E_k = A_k (1 - f_{k-1}) of the pixel's delta form factor, and receivers
 // that meet inside the pixel share it side by side (coverage_list.h, "Layers").
 //
-// The depth kept per receiver and pixel is the distance along the face axis at which the ray through one
-// point of the pixel meets the receiver's plane: the pixel centre moved into the receiver's clipped bounding
-// box, with the result clamped into the range of the clipped polygon's vertex depths. Why: 1 / depth is affine in
-// pixel coordinates, so it costs one multiply-add per entry (the rasterizer reports coverage, not where in the
-// pixel it lies); inside a receiver it is the exact depth at the pixel centre; at its border the plane is not
-// extrapolated beyond the receiver (a grazing plane evaluated at a centre it does not cover could land far
-// behind, or behind the shooter), so a receiver is never sorted outside its own depth range. Pieces of one
+// The depth kept per receiver and pixel is the distance along the face axis at which the ray through the pixel
+// centre meets the receiver's plane, also where the receiver covers only part of the pixel; where that ray meets
+// the plane behind the shooter (or runs parallel to it), 1 / depth at the pixel's corner nearest the shooter, the
+// largest over the pixel. Why: 1 / depth is affine in pixel coordinates, so it costs one multiply-add per entry
+// (the rasterizer reports coverage, not where in the pixel it lies); it depends on the plane and the pixel only, so
+// every piece of one plane gets the same key whatever order the receivers come in, and two planes are compared
+// along the same ray as a z-buffer compares them; with a spread of |alpha| + |beta| it bounds the depths the
+// receiver can have in the pixel (docs/form-factors.md, "Depth kept per receiver and pixel"). Pieces of one
 // physical surface are grouped by surface id, not by comparing depths, so coplanar pieces never occlude each
 // other whatever rounding does to their planes.
 //
