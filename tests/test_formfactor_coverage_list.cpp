@@ -204,6 +204,65 @@ TEST(FormfactorCoverageList, ArenaGroupsPiecesOfOneSurface) {
   EXPECT_DOUBLE_EQ(e[2], 0.3 * 0.9);
 }
 
+TEST(FormfactorCoverageList, ArenaKeepsAGroupWholeWhenAnotherSurfaceLiesBetweenItsDepths) {
+  // Two pieces of surface 5 (a tilted plane: 2.0 and 2.2 at their sample points) and a piece of surface 6 at a
+  // depth between them. Positions are decided at group heads, so surface 6 goes behind the whole group; the
+  // three ranges touch, cover 0.9 together, and each piece is seen whole: E = A = 0.3. Put between the pieces,
+  // surface 6 would split the group into two layers: 0.3, then 0.3 x 0.7 = 0.21, then 0.3 x 0.49 = 0.147.
+  CoverageArena arena;
+  arena.reset(1);
+  EXPECT_TRUE(arena.insert(0, {2.0, 0.3, 0, 5}));
+  EXPECT_TRUE(arena.insert(0, {2.2, 0.3, 1, 5}));
+  EXPECT_TRUE(arena.insert(0, {2.1, 0.3, 2, 6}));
+  std::vector<std::uint32_t> order;
+  arena.for_each(0, [&](const CoverageEntry& e) { order.push_back(e.receiver); });
+  EXPECT_EQ(order, (std::vector<std::uint32_t>{0, 1, 2}));
+  std::vector<double> e(3, -1.0);
+  const double f = arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.3);
+  EXPECT_DOUBLE_EQ(e[1], 0.3);
+  EXPECT_DOUBLE_EQ(e[2], 0.3);
+  EXPECT_DOUBLE_EQ(f, 0.9);
+}
+
+TEST(FormfactorCoverageList, AFullEntryAtThePartialEntrysDepthHidesItWhateverTheOrder) {
+  // A partial entry at exactly the depth of a full one is not in front of it: offered after the full entry it is
+  // refused, so offered before it must be dropped too, and the full receiver takes the whole pixel either way.
+  for (const bool partial_first : {true, false}) {
+    CoverageArena arena;
+    arena.reset(1);
+    const CoverageEntry partial{2.0, 0.5, 0, 1}, full{2.0, 1.0, 1, 2};
+    if (partial_first) arena.insert(0, partial);
+    EXPECT_TRUE(arena.insert(0, full));
+    if (!partial_first) {
+      EXPECT_FALSE(arena.insert(0, partial));
+    }
+    std::vector<double> e(2, -1.0);
+    EXPECT_DOUBLE_EQ(arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; }), 1.0);
+    EXPECT_EQ(e, (std::vector<double>{-1.0, 1.0})) << partial_first;
+    std::vector<double> taken(2, -1.0);
+    arena.take_all([&](std::size_t, std::uint32_t r, double v) { taken[r] = v; });
+    EXPECT_EQ(taken, e) << partial_first;
+  }
+}
+
+TEST(FormfactorCoverageList, AFullEntryBetweenTheDepthsOfOneSurfacesPiecesKeepsTheGroupWhole) {
+  // A group is placed, and judged in front of or behind a full entry, by its nearest piece (as on insertion):
+  // surface 5 starts in front of the full entry at 2.0, so both its pieces are walked, each seen whole (0.3,
+  // sum 0.6), and the full receiver takes the rest, 0.4. Cutting the group at its second piece would give the
+  // full receiver 0.7.
+  CoverageArena arena;
+  arena.reset(1);
+  EXPECT_TRUE(arena.insert(0, {1.0, 0.3, 0, 5}));
+  EXPECT_TRUE(arena.insert(0, {3.0, 0.3, 1, 5}));
+  EXPECT_TRUE(arena.insert(0, {2.0, 1.0, 2, 6}));
+  std::vector<double> e(3, -1.0);
+  EXPECT_DOUBLE_EQ(arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; }), 1.0);
+  EXPECT_DOUBLE_EQ(e[0], 0.3);
+  EXPECT_DOUBLE_EQ(e[1], 0.3);
+  EXPECT_DOUBLE_EQ(e[2], 0.4);
+}
+
 TEST(FormfactorCoverageList, FullEntryTakesItsPlaceByDepth) {
   CoverageArena arena;
   arena.reset(2);
