@@ -362,6 +362,42 @@ TEST(HemicubeGeometry, SharedEdgeCutsAreBitIdentical) {
   EXPECT_EQ(shared, 2);  // b and the cut point on the seam plane
 }
 
+TEST(HemicubeGeometry, SharedEdgeCutsAreBitIdenticalOnEveryFace) {
+  // The same on random shared edges, on all five faces: every vertex of the clipped t1 that lies on the line of
+  // the shared edge (a kept end or a cut of the edge) is bit-identical to a vertex of the clipped t2, which walks
+  // the edge the other way. The cut point computed from either end would differ in its last bits on some edges.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0), up(0.05, 2.0);
+  std::vector<Vec3> scratch(16), o1(16), o2(16);
+  int on_edge = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Vec3 a{u(rng), u(rng), up(rng)}, b{u(rng), u(rng), up(rng)};
+    const Vec3 c{u(rng), u(rng), up(rng)}, d{u(rng), u(rng), up(rng)};
+    const Polygon t1 = {a, b, c}, t2 = {b, a, d};
+    const Vec3 along = glm::normalize(b - a);
+    for (int f = 0; f < kHemicubeFaces; ++f) {
+      const auto face = static_cast<HemicubeFace>(f);
+      const std::size_t m1 = clip_to_face(t1, face, ~0u, scratch, o1);
+      const std::size_t m2 = clip_to_face(t2, face, ~0u, scratch, o2);
+      const Vec3 fa = to_face(face, a);
+      const Vec3 fb = to_face(face, b);
+      for (std::size_t i = 0; i < m1; ++i) {
+        const Vec3 p = o1[i];
+        // On the edge's line (in face coordinates, which keep distances): c, d and the face's corners are not,
+        // in general position.
+        const Vec3 off = (p - fa) - glm::dot(p - fa, to_face(face, along)) * to_face(face, along);
+        if (glm::length(off) > 1e-9 * (1.0 + glm::length(fb - fa))) continue;
+        ++on_edge;
+        bool found = false;
+        for (std::size_t j = 0; j < m2; ++j) found = found || o2[j] == p;
+        EXPECT_TRUE(found) << "trial " << trial << " face " << f;
+      }
+    }
+  }
+  std::printf("%d clipped vertices on a shared edge checked\n", on_edge);
+  EXPECT_GE(on_edge, 400);  // the loop checks something
+}
+
 TEST(HemicubeGeometry, InverseDepthIsAffineInPixels) {
   const Shooter s = testing::rotated_shooter(Vec3(0.1, 0.2, 0.3), glm::normalize(Vec3(0.2, -0.1, 1.0)), 0.4);
   const Polygon quad = testing::rectangle({-2, -2, 2.5}, {0, 5, 0.5}, {5, 0, 0.3});
@@ -462,6 +498,15 @@ TEST(HemicubeGeometry, TileMaskMarksThePixelsOfItsBoxes) {
   large.reset(1000, 500);
   EXPECT_TRUE(large.empty());
   EXPECT_FALSE(large.overlaps(992.0, 992.5, 496.0, 496.5));
+
+  // 65 pixels wide: 64 one-pixel tiles would leave pixel 64 without a bit of the 64-bit row, so tiles are two
+  // pixels wide (33 to a row) and the last pixel is tile 32, apart from tile 0 and from pixels 62 and 63.
+  TileMask edge;
+  edge.reset(65, 4);
+  edge.add(64.2, 64.8, 1.0, 1.5);
+  EXPECT_TRUE(edge.overlaps(64.5, 65.0, 0.0, 3.0));
+  EXPECT_FALSE(edge.overlaps(0.0, 1.9, 0.0, 3.0));
+  EXPECT_FALSE(edge.overlaps(62.0, 63.9, 0.0, 3.0));
 }
 
 }  // namespace
