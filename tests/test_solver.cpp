@@ -388,6 +388,61 @@ TEST(SolverExceptions, AThrowingProgressCallbackLeavesAReadableSolution) {
   EXPECT_TRUE(violations.empty()) << violations.size() << " violations, the first: " << violations.front().message;
 }
 
+// A progress callback that stops the solve right after the shot that brought the unshot flux under --converge
+// has not interrupted it: the report says converged, not interrupted. Two unit squares at gap 1, one patch each,
+// shot from the centroid: after the emitter's shot the unshot fraction is rho F = 0.5 x 4 B-3(0.5,0.5,1) =
+// 0.5 x 0.2394565 (references.md).
+TEST(SolverInterruptFlags, AStopAfterTheConvergingShotIsNoInterruption) {
+  const Scene scene = test::two_unit_squares();
+  const double unshot = 0.5 * 0.2394565;
+  for (const double converge : {0.5, 0.01}) {
+    SolverOptions options = one_patch_per_face(1);
+    options.converge = converge;
+    Solver solver(scene, options);
+    int calls = 0;
+    solver.run([&](const Progress& progress) {
+      ++calls;
+      EXPECT_NEAR(progress.unshot_fraction, unshot, 1e-6);
+      return false;
+    });
+    EXPECT_EQ(calls, 1) << converge;
+    EXPECT_EQ(solver.shots(), 1) << converge;
+    EXPECT_NEAR(solver.unshot_fraction(), unshot, 1e-6) << converge;
+    const bool converged = unshot < converge;
+    EXPECT_EQ(solver.converged(), converged) << converge;
+    EXPECT_EQ(solver.interrupted(), !converged) << converge;
+  }
+}
+
+// The ambient term of Cohen et al. 1988 (references.md) before any shot in the closed unit cube (floor E = 1,
+// every rho = 0.5, one patch per face): rho_avg = 0.5, R = 2, sum dB A / sum A = 1/6, ambient = 1/3. Displayed
+// leaf radiosity is B + rho ambient: 1 + 1/6 on the floor, 1/6 elsewhere; inner nodes (the patches above their
+// one element) hold their B. At convergence nothing is unshot and the ambient term is 0.
+TEST(SolverAmbient, ClosedUnitCubeBeforeTheFirstShotAndAtConvergence) {
+  const Scene scene = test::unit_cube();
+  Solver solver(scene, one_patch_per_face(1));
+  const mesh::Hierarchy& hierarchy = solver.hierarchy();
+  ASSERT_EQ(hierarchy.patches().size(), 6u);
+  ASSERT_EQ(hierarchy.leaf_count(), 6u);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(solver.ambient()[c], 1.0 / 3.0, 1e-15) << c;
+  const std::vector<Rgb> displayed = solver.displayed_radiosity();
+  ASSERT_EQ(displayed.size(), hierarchy.node_count());
+  const auto floor = scene.find_group("floor");
+  ASSERT_TRUE(floor.has_value());
+  int inner = 0;
+  for (mesh::NodeId node = 0; node < hierarchy.node_count(); ++node) {
+    const bool on_floor = scene.surfaces[hierarchy.surface(node)].group == *floor;
+    const double b = on_floor ? 1.0 : 0.0;
+    if (!hierarchy.is_leaf(node)) ++inner;
+    const double expected = hierarchy.is_leaf(node) ? b + 0.5 / 3.0 : b;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(displayed[node][c], expected, 1e-15) << "node " << node;
+  }
+  EXPECT_EQ(inner, 6);
+  solver.run();
+  ASSERT_TRUE(solver.converged());
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(solver.ambient()[c], 0.0, 1e-11) << c;
+}
+
 TEST(SolverRelaxation, OutsideOneToTwoIsRefused) {
   const Scene scene = test::unit_cube();
   for (double relaxation : {0.9, 2.0, -1.0, std::nan("")}) {
