@@ -333,6 +333,44 @@ TEST(InvariantBroken, DisplayHangingVertexNotInterpolatedOrTrianglesNotTilingThe
   EXPECT_TRUE(reports(check_display(h, moved), "display-positions")) << describe(check_display(h, moved));
 }
 
+// Damage that only one check sees. Two copies of one triangle of a square leaf (its diagonal halves have equal
+// areas) cover the leaf's area exactly but overlap: only the directed-edge check reports it. A triangle handed to
+// an inner node is reported at that node.
+TEST(InvariantBroken, DisplayTrianglesThatOverlapWithTheRightAreaOrBelongToAnInnerNode) {
+  const Hierarchy h = refined();
+  std::vector<Rgb> values(h.node_count());
+  for (NodeId n = 0; n < h.node_count(); ++n) values[n] = h.radiosity(n);
+  const DisplayMesh sound = build_display_mesh(h, values);
+  std::size_t pair = sound.triangles.size();
+  for (std::size_t t = 0; t + 1 < sound.triangles.size() && pair == sound.triangles.size(); ++t) {
+    const NodeId leaf = sound.triangle_leaf[t];
+    const auto count = std::count(sound.triangle_leaf.begin(), sound.triangle_leaf.end(), leaf);
+    if (count == 2 && sound.triangle_leaf[t + 1] == leaf) pair = t;
+  }
+  ASSERT_LT(pair, sound.triangles.size()) << "no leaf of two triangles";
+  DisplayMesh folded = sound;
+  folded.triangles[pair + 1] = folded.triangles[pair];
+  EXPECT_TRUE(reports_message(check_display(h, folded), "display-crack-free", "two triangles on the same side"))
+      << describe(check_display(h, folded));
+
+  DisplayMesh foreign = sound;
+  const NodeId inner = h.patches()[0];
+  ASSERT_FALSE(h.is_leaf(inner));
+  foreign.triangle_leaf.back() = inner;
+  EXPECT_TRUE(reports_message(check_display(h, foreign), "display-crack-free", "not a leaf"))
+      << describe(check_display(h, foreign));
+}
+
+// A patch not at level 0 is reported at the patch itself (its children's levels disagree with it too).
+TEST(InvariantBroken, PatchLevelNotZeroIsReportedAtThePatch) {
+  Hierarchy h = refined();
+  const NodeId patch = h.patches()[0];
+  h.impl().level[patch] = 1;
+  bool at_patch = false;
+  for (const Violation& v : check_invariants(h)) at_patch = at_patch || (v.invariant == "levels-parents" && v.node == patch);
+  EXPECT_TRUE(at_patch) << describe(check_invariants(h));
+}
+
 // A 2 x 1 rectangle a million units from the origin (a building in georeferenced metres), every leaf split
 // three times: its points are known to about 1e-10 there, which is above the tolerances relative to its size,
 // so those follow the position error instead. The intact mesh reports nothing; real damage still shows.
