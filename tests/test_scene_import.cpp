@@ -690,6 +690,17 @@ TEST_F(SceneImport, import_colour_with_more_than_three_numbers_warns_with_its_li
   EXPECT_EQ(scene.materials[scene.faces[0].material].reflectance, Rgb(0.7));
 }
 
+TEST_F(SceneImport, import_colour_that_is_not_one_or_three_numbers_is_error_with_mtl_line) {
+  const std::string obj = write("colour.obj", "mtllib colour.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl grey\nf 1 2 3\n");
+  for (const std::string kd : {"0.5 abc 0.5", "0.5 0.5", ""}) {
+    const std::string mtl = write("colour.mtl", "# materials\n\nnewmtl grey\nKd " + kd + "\n");
+    const InputError e = import_error(obj);
+    EXPECT_EQ(e.file(), mtl) << kd;
+    EXPECT_EQ(e.line(), 4) << kd;
+    EXPECT_NE(e.message().find("one or three numbers"), std::string::npos) << kd << ": " << e.message();
+  }
+}
+
 TEST_F(SceneImport, import_camera_comment_is_read_back) {
   const std::string obj = write("cam.obj",
                                 "# aarad camera: eye 1 2 3 forward 0 0 2 up 0 1 0 vertical_fov 0.5\n"
