@@ -12,6 +12,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -53,24 +55,40 @@ void Scene::build_surfaces() {
   surfaces.clear();
   for (Group& g : groups) g.surfaces.clear();
   const double tolerance = kPlaneDistance * diagonal();
-
+  // A face joins the first surface of its group (in the order they were made) whose material and smoothing group
+  // it shares, whose normal is within kNormalDotTolerance of its own, and whose plane holds its vertices within
+  // `tolerance`. The last two bound the surface's offset d: |n_s . v + d_s| <= tolerance with |n_s - n_f| <=
+  // sqrt(2 kNormalDotTolerance) = e gives d_s within tolerance + e |v| of -n_f . v for every vertex v of the face.
+  // So only the surfaces whose d lies in that window are tried (kept sorted by d): a mesh of n faces in n planes
+  // took n^2 / 2 tests (5 s for 80 000 triangles).
+  const double normal_reach = std::sqrt(2.0 * kNormalDotTolerance);
+  std::multimap<double, std::uint32_t> by_offset;  // the current group's surfaces by d
   for (std::uint32_t gi = 0; gi < groups.size(); ++gi) {
     Group& group = groups[gi];
+    by_offset.clear();
     for (const std::uint32_t fi : group.faces) {
       Face& face = faces[fi];
       const Plane plane = plane_of(face.vertices);
+      double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+      for (const Vec3& v : face.vertices) {
+        const double centre = -glm::dot(plane.normal, v), length = glm::length(v);
+        // The window, widened by rounding's share (the products above and the tests below are each within a few
+        // ulps of |v|).
+        const double reach = tolerance + normal_reach * length + 1e-12 * (length + tolerance);
+        lo = std::max(lo, centre - reach);
+        hi = std::min(hi, centre + reach);
+      }
       std::optional<std::uint32_t> match;
-      for (const std::uint32_t si : group.surfaces) {
+      for (auto it = by_offset.lower_bound(lo); it != by_offset.end() && it->first <= hi; ++it) {
+        const std::uint32_t si = it->second;
+        if (match && si > *match) continue;  // the first surface made wins, as a scan in order would find
         const Surface& s = surfaces[si];
         if (s.material != face.material || s.smoothing != face.smoothing) continue;
         if (glm::dot(s.plane.normal, plane.normal) < 1.0 - kNormalDotTolerance) continue;
         const bool in_plane = std::all_of(face.vertices.begin(), face.vertices.end(), [&](const Vec3& v) {
           return std::abs(s.plane.signed_distance(v)) <= tolerance;
         });
-        if (in_plane) {
-          match = si;
-          break;
-        }
+        if (in_plane) match = si;
       }
       if (!match) {
         Surface s;
@@ -81,6 +99,7 @@ void Scene::build_surfaces() {
         surfaces.push_back(s);
         match = static_cast<std::uint32_t>(surfaces.size() - 1);
         group.surfaces.push_back(*match);
+        by_offset.emplace(plane.d, *match);
       }
       Surface& s = surfaces[*match];
       s.faces.push_back(fi);

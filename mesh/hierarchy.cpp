@@ -139,10 +139,11 @@ Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(
   m.mesh.add_property(m.face_node, "node");
   m.boundaries.resize(scene.surfaces.size());
   double made = 0.0;  // initial elements so far, against max_initial_elements
+  const double diagonal = scene.diagonal();
   for (std::uint32_t s = 0; s < scene.surfaces.size(); ++s) {
     const double limit = m.options.max_initial_elements;
     const SurfaceMeshing meshing =
-        mesh_surface(scene, s, m.options.patch_size, m.options.element_size, limit - made, limit);
+        mesh_surface(scene, s, m.options.patch_size, m.options.element_size, limit - made, limit, diagonal);
     for (const auto& elements : meshing.elements) made += static_cast<double>(elements.size());
     const int base = static_cast<int>(m.mesh.n_vertices());
     for (const Vec3& p : meshing.points) m.mesh.add_vertex(to_point(p));

@@ -60,7 +60,8 @@ struct Budget {
   const Scene& scene;
   const Surface& surface;
   double remaining = 0.0;
-  double limit = 0.0;  // of the whole scene
+  double limit = 0.0;     // of the whole scene
+  double diagonal = 0.0;  // the scene's
 
   void check(double count, const char* items, const char* option, double size) const {
     if (count <= remaining) return;
@@ -267,7 +268,7 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   // (a crash, for vertices or gaps of one ulp to 1e-9). So a vertex within `weld` of an earlier one is that vertex
   // (the first of a cluster, in face order, is kept, with its 3D position), and below, an edge passing within
   // `weld` of another vertex is split there.
-  const double weld = kPlaneDistance * scene.diagonal();
+  const double weld = kPlaneDistance * budget.diagonal;
   std::map<std::pair<double, double>, std::vector<Vec2>> cells;  // kept vertices by cell of side `weld`
   const auto welded = [&](const Vec2& p) {
     const double cx = std::floor(p.x / weld), cy = std::floor(p.y / weld);
@@ -380,9 +381,9 @@ MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options
 }
 
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double patch_size, double element_size,
-                            double max_elements, double scene_limit) {
+                            double max_elements, double scene_limit, double diagonal) {
   const Surface& surface = scene.surfaces.at(surface_id);
-  const Budget budget{scene, surface, max_elements, scene_limit};
+  const Budget budget{scene, surface, max_elements, scene_limit, diagonal};
   const std::vector<Vec3>& first = scene.faces[surface.faces.front()].vertices;
   const Frame frame = frame_of(surface.plane, first.front());
   std::optional<std::vector<Vec3>> outline =
@@ -391,7 +392,7 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
     // The grids interpolate between the corners, so a corner that import let off the surface's plane (faces
     // within 1e-6 of the diagonal join a surface) would take whole rows of patches off it: such corners are
     // moved onto the plane. Corners within 1e-12 of the diagonal keep their bits.
-    const double off = 1e-12 * scene.diagonal();
+    const double off = 1e-12 * diagonal;
     for (Vec3& p : *outline) {
       const double distance = surface.plane.signed_distance(p);
       if (std::abs(distance) > off) p -= distance * surface.plane.normal;

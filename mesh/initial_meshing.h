@@ -37,7 +37,9 @@ struct SurfaceMeshing {
 // elements: what the scene's limit (MeshingOptions::max_initial_elements, named in the message) leaves after
 // the surfaces meshed before it. Counts are exact and checked before allocating, except the patches of a
 // Delaunay-meshed surface: bounded by its area before the mesher runs, counted exactly after it.
+// `diagonal` is scene.diagonal(), given by the caller: computing it reads every face, and a scene of n faces has
+// up to n surfaces.
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size,
-                            double max_elements, double scene_limit);
+                            double max_elements, double scene_limit, double diagonal);
 
 }  // namespace aarad::mesh

@@ -540,6 +540,27 @@ TEST_F(SceneImport, import_smoothing_groups_are_read_per_face_and_written_back) 
   for (std::size_t f = 0; f < scene.faces.size(); ++f) EXPECT_EQ(back.faces[f].smoothing, scene.faces[f].smoothing) << f;
 }
 
+// build_surfaces tries only the surfaces whose offset d can hold the face: a face tilted by 1e-5 radians (within
+// the normal tolerance) about a line 1000 from the origin has its own d 0.01 away from its surface's, ten times
+// the plane distance tolerance (1e-6 of a diagonal of about 1000), and still joins it; tilted by 2e-5 it does not.
+TEST(SceneSurfaces, AFaceFarFromTheOriginJoinsASurfaceWhoseOffsetDiffersByItsTilt) {
+  for (const double tilt : {1e-5, 2e-5}) {
+    Scene scene;
+    scene.name = "far";
+    const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+    const std::uint32_t group = scene.add_group("floor");
+    scene.add_face(group, grey, {{999, 0, 0}, {1000, 0, 0}, {1000, 1, 0}, {999, 1, 0}});
+    // Pivoting about x = 1000.5: its vertices stay within 5e-6 (tilt 1e-5) of the first face's plane z = 0.
+    const auto z = [&](double x) { return tilt * (x - 1000.5); };
+    scene.add_face(group, grey, {{1000, 0, z(1000)}, {1001, 0, z(1001)}, {1001, 1, z(1001)}, {1000, 1, z(1000)}});
+    scene.add_face(scene.add_group("far"), grey, {{0, 0, 5}, {1, 0, 5}, {0, 1, 5}});  // a diagonal of about 1000
+    scene.build_surfaces();
+    const Plane own = plane_of(scene.faces[1].vertices);
+    EXPECT_GT(std::abs(own.d - scene.surfaces[0].plane.d), 5e-3) << "tilt " << tilt;
+    EXPECT_EQ(scene.groups[group].surfaces.size(), tilt == 1e-5 ? 1u : 2u) << "tilt " << tilt;
+  }
+}
+
 TEST_F(SceneImport, import_faces_on_one_another_in_one_plane_warn_with_their_lines) {
   write("s.mtl", kSquareMtl);
   const std::string obj = write("rug.obj",
