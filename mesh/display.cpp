@@ -7,6 +7,7 @@
 #include "mesh/leaf_mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <tuple>
@@ -39,39 +40,62 @@ struct Host {
 // vertices keep their host edge's interpolation (a surface's outer boundary has none).
 void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
                             std::span<const Host> host, std::vector<Rgb>& weighted, std::vector<double>& weight) {
+  const double tolerance = kPlaneDistance * m.scene.diagonal();
+  // Candidates by cell of side `tolerance` (as the initial meshing welds vertices): two within the tolerance lie in
+  // the same cell or in neighbouring ones.
   struct Candidate {
     std::uint32_t group, smoothing;
+    std::array<double, 3> cell;
     Vec3 p;
     int vertex;
+    auto key() const { return std::tie(group, smoothing, cell); }
   };
   std::vector<Candidate> candidates;
   for (std::size_t v = 0; v < vertex_surface.size(); ++v) {
     if (!(weight[v] > 0.0) || host[v].a >= 0) continue;
     const Surface& surface = m.scene.surfaces[vertex_surface[v]];
-    if (surface.smoothing != 0)
-      candidates.push_back({surface.group, surface.smoothing, m.point(static_cast<int>(v)), static_cast<int>(v)});
+    if (surface.smoothing == 0) continue;
+    const Vec3 p = m.point(static_cast<int>(v));
+    candidates.push_back({surface.group, surface.smoothing,
+                          {std::floor(p.x / tolerance), std::floor(p.y / tolerance), std::floor(p.z / tolerance)}, p,
+                          static_cast<int>(v)});
   }
   if (candidates.empty()) return;
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-    return std::tie(a.group, a.smoothing, a.p.x, a.vertex) < std::tie(b.group, b.smoothing, b.p.x, b.vertex);
+    return std::tie(a.group, a.smoothing, a.cell, a.vertex) < std::tie(b.group, b.smoothing, b.cell, b.vertex);
   });
-  // Union-find over the candidates; pairs are found by a sweep along x.
+  // Union-find over the candidates.
   std::vector<std::size_t> root(candidates.size());
   std::iota(root.begin(), root.end(), std::size_t{0});
   const auto find = [&](std::size_t i) {
     while (root[i] != i) i = root[i] = root[root[i]];
     return i;
   };
-  const double tolerance = kPlaneDistance * m.scene.diagonal();
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const Candidate& a = candidates[i];
-    for (std::size_t j = i + 1; j < candidates.size(); ++j) {
-      const Candidate& b = candidates[j];
-      if (b.group != a.group || b.smoothing != a.smoothing || b.p.x - a.p.x > tolerance) break;
-      if (std::abs(b.p.y - a.p.y) <= tolerance && std::abs(b.p.z - a.p.z) <= tolerance &&
-          vertex_surface[static_cast<std::size_t>(a.vertex)] != vertex_surface[static_cast<std::size_t>(b.vertex)])
-        root[find(j)] = find(i);
-    }
+  const auto unite_close = [&](std::size_t i, std::size_t j) {
+    const Candidate &a = candidates[i], &b = candidates[j];
+    if (std::abs(b.p.x - a.p.x) <= tolerance && std::abs(b.p.y - a.p.y) <= tolerance &&
+        std::abs(b.p.z - a.p.z) <= tolerance &&
+        vertex_surface[static_cast<std::size_t>(a.vertex)] != vertex_surface[static_cast<std::size_t>(b.vertex)])
+      root[find(j)] = find(i);
+  };
+  const auto by_key = [](const Candidate& c, const Candidate& d) { return c.key() < d.key(); };
+  // Cell by cell: pairs within the cell, and with the 13 neighbouring cells that sort after it.
+  for (std::size_t begin = 0; begin < candidates.size();) {
+    std::size_t end = begin + 1;
+    while (end < candidates.size() && candidates[end].key() == candidates[begin].key()) ++end;
+    for (std::size_t i = begin; i < end; ++i)
+      for (std::size_t j = i + 1; j < end; ++j) unite_close(i, j);
+    for (int dx = 0; dx <= 1; ++dx)
+      for (int dy = dx == 0 ? 0 : -1; dy <= 1; ++dy)
+        for (int dz = dx == 0 && dy == 0 ? 1 : -1; dz <= 1; ++dz) {
+          Candidate probe = candidates[begin];
+          probe.cell = {probe.cell[0] + dx, probe.cell[1] + dy, probe.cell[2] + dz};
+          const auto [first, last] = std::equal_range(candidates.begin() + static_cast<std::ptrdiff_t>(end),
+                                                      candidates.end(), probe, by_key);
+          for (auto j = first; j != last; ++j)
+            for (std::size_t i = begin; i < end; ++i) unite_close(i, static_cast<std::size_t>(j - candidates.begin()));
+        }
+    begin = end;
   }
   // Sums per class, in candidate order (deterministic), then given to every member.
   std::vector<Rgb> class_weighted(candidates.size());
