@@ -3,13 +3,15 @@
 // 0.75 sqrt(area) of a face edge; with balance on) to 10^4, 10^5 and 10^6 leaves.
 // Reported: time per split (thread CPU time of split() calls only, balance splits included in the count) and bytes per leaf
 // (heap growth from mallinfo2, and the hierarchy's own container count). Goals (issue 4): time per split
-// within 1.5x across the sizes, under 1 KiB per leaf.
+// within 1.5x across the sizes, under 1 KiB per leaf. Also: building the surfaces and the hierarchy of a scene of
+// many surfaces (BM_BuildTerrain).
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
 
+#include <cmath>
 #include <ctime>
 #include <deque>
 #include <limits>
@@ -94,6 +96,44 @@ void BM_RefineAdaptiveBalanced(benchmark::State& state) { refine(state, true); }
 
 BENCHMARK(BM_RefineUniform)->Arg(10000)->Arg(100000)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RefineAdaptiveBalanced)->Arg(10000)->Arg(100000)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// Scenes of many surfaces: an n x n heightfield (z = 0.3 sin(0.21 i) cos(0.17 j) over a grid of spacing 0.05) of
+// 2 n^2 triangles, each in a plane of its own, so each its own surface of one group: grouping the faces into
+// surfaces (Scene::build_surfaces) and the initial meshing (the Hierarchy's constructor). Both were quadratic in
+// the surfaces (190 s for n = 200); the time per face should stay about the same across n.
+void BM_BuildTerrain(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  aarad::Scene scene;
+  scene.name = "terrain";
+  const std::uint32_t ground = scene.add_material(aarad::Material{"ground", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("terrain");
+  const auto point = [](int i, int j) {
+    return Vec3(0.05 * i, 0.3 * std::sin(0.21 * i) * std::cos(0.17 * j), 0.05 * j);
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      scene.add_face(group, ground, {point(i, j), point(i, j + 1), point(i + 1, j + 1)});
+      scene.add_face(group, ground, {point(i, j), point(i + 1, j + 1), point(i + 1, j)});
+    }
+  double surfaces_seconds = 0.0, meshing_seconds = 0.0;
+  for (auto _ : state) {
+    const double t0 = thread_seconds();
+    scene.build_surfaces();
+    const double t1 = thread_seconds();
+    const Hierarchy h(scene, aarad::mesh::MeshingOptions{});
+    const double t2 = thread_seconds();
+    benchmark::DoNotOptimize(h.leaf_count());
+    surfaces_seconds += t1 - t0;
+    meshing_seconds += t2 - t1;
+  }
+  const double faces = static_cast<double>(scene.faces.size()), runs = static_cast<double>(state.iterations());
+  state.counters["faces"] = faces;
+  state.counters["surfaces"] = static_cast<double>(scene.surfaces.size());
+  state.counters["surfaces_us_per_face"] = 1e6 * surfaces_seconds / runs / faces;
+  state.counters["meshing_us_per_face"] = 1e6 * meshing_seconds / runs / faces;
+}
+
+BENCHMARK(BM_BuildTerrain)->Arg(50)->Arg(100)->Arg(200)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
