@@ -411,16 +411,40 @@ Hierarchy::Refusal Hierarchy::refusal(NodeId node, double& smallest) const {
   std::array<Vec3, 4> c, mid;
   for (int k = 0; k < n; ++k) c[static_cast<std::size_t>(k)] = m.point(m.corners[node][static_cast<std::size_t>(k)]);
   for (int k = 0; k < n; ++k) mid[static_cast<std::size_t>(k)] = 0.5 * (c[static_cast<std::size_t>(k)] + c[static_cast<std::size_t>((k + 1) % n)]);
+  // A leaf a few ulps across has children that floating point cannot hold: an edge midpoint rounds onto an end of
+  // its edge (or the centre onto a midpoint), and a child gets two corners at one point and no area. With a tiny
+  // min_area and max_level 60, splitting one corner's child over and over reached that at level 51 (zero-area
+  // nodes, a hanging vertex on top of a corner, children turned clockwise: check_invariants found all three).
+  bool degenerate = false;
+  for (int k = 0; k < n; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    degenerate |= mid[ku] == c[ku] || mid[ku] == c[static_cast<std::size_t>((k + 1) % n)];
+  }
+  // The least child area as split() would make it, counted along the surface's normal: a child turned clockwise
+  // by rounding counts as negative.
+  const Vec3 normal = plane(node).normal;
+  const auto made_area = [&](std::span<const Vec3> child) { return glm::dot(aarad::vector_area(child), normal); };
+  double smallest_made = std::numeric_limits<double>::infinity();
   if (n == 4) {
     const Vec3 centre = 0.25 * (c[0] + c[1] + c[2] + c[3]);
     smallest = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 4; ++k) {
-      const std::array<Vec3, 4> q{c[static_cast<std::size_t>(k)], mid[static_cast<std::size_t>(k)], centre, mid[static_cast<std::size_t>((k + 3) % 4)]};
+      const auto ku = static_cast<std::size_t>(k);
+      degenerate |= centre == mid[ku];
+      const std::array<Vec3, 4> q{c[ku], mid[ku], centre, mid[static_cast<std::size_t>((k + 3) % 4)]};
       smallest = std::min(smallest, aarad::area(q));
+      smallest_made = std::min(smallest_made, made_area(q));
     }
   } else {
+    for (int k = 0; k < 3; ++k) {
+      const auto ku = static_cast<std::size_t>(k);
+      const std::array<Vec3, 3> t{c[ku], mid[ku], mid[static_cast<std::size_t>((k + 2) % 3)]};
+      smallest_made = std::min(smallest_made, made_area(t));
+    }
+    smallest_made = std::min(smallest_made, made_area(std::array<Vec3, 3>{mid[0], mid[1], mid[2]}));
     smallest = m.area[node] / 4.0;  // the four children of a triangle are congruent up to rounding
   }
+  if (degenerate || !(smallest_made > 0.0)) return Refusal::kDegenerate;
   return smallest < m.options.min_area ? Refusal::kMinArea : Refusal::kNone;
 }
 
@@ -447,6 +471,10 @@ SplitResult Hierarchy::split(NodeId node) {
     case Refusal::kMinArea:
       result.reason = "node " + std::to_string(node) + ": a child would have area " + std::to_string(smallest) +
                       ", below min_area " + std::to_string(m.options.min_area);
+      return result;
+    case Refusal::kDegenerate:
+      result.reason = "node " + std::to_string(node) + " is too small to split in floating point: a child would have "
+                      "two corners at one point";
       return result;
   }
   if (m.options.balance) split_coarser_neighbours(node, result.also_split);

@@ -111,7 +111,8 @@ class Hierarchy {
   // Splits leaf `node` into four (quads into four quads, triangles into four triangles). Edge midpoints a
   // neighbour already made are reused; an unsplit neighbour gains the midpoint as a hanging vertex.
   // Children inherit the parent's B and unshot 0. Refused (ok = false) when the node is not a leaf, when
-  // its level is max_level, or when a child would be smaller than min_area. With balance on, neighbours
+  // its level is max_level, when a child would be smaller than min_area, or when the node is too small for its
+  // children's corners to be distinct points in floating point. With balance on, neighbours
   // are split first so edge-neighbours differ by at most one level.
   SplitResult split(NodeId node);
   // Whether split(node) would be accepted (the same tests, without composing a reason).
@@ -128,7 +129,7 @@ class Hierarchy {
   Impl& impl() { return *impl_; }
 
  private:
-  enum class Refusal { kNone, kMissing, kInner, kMaxLevel, kMinArea };
+  enum class Refusal { kNone, kMissing, kInner, kMaxLevel, kMinArea, kDegenerate };
   // Why split(node) would be refused (kNone: it would not); `smallest` gets the smallest child's area when the
   // area was tested.
   Refusal refusal(NodeId node, double& smallest) const;

@@ -387,6 +387,33 @@ TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
   EXPECT_EQ(g.leaf_count(), 1u);
 }
 
+// A leaf a few ulps across cannot be split: its edge midpoints round onto its corners. With min_area near zero
+// and max_level 60 (both allowed), splitting the child at one corner over and over made children with two corners
+// at one point at level 51 (area 0, a hanging vertex on a corner, children turned clockwise); the split is
+// refused instead, with its reason, and the hierarchy stays sound, with balance too.
+TEST(HierarchySplit, LeavesTooSmallForFloatingPointAreNotSplit) {
+  for (const bool balance : {false, true}) {
+    for (const Scene& scene : {test::polygon_scene({{1, 1}, {2, 1}, {2, 2}, {1, 2}}, "square"),
+                               test::polygon_scene({{1, 1}, {2, 1}, {1, 2}}, "triangle")}) {
+      MeshingOptions o = sizes(1.0, 1.0);
+      o.max_level = 60;
+      o.min_area = 1e-300;
+      o.balance = balance;
+      Hierarchy h(scene, o);
+      NodeId leaf = h.leaves()[0];
+      SplitResult r;
+      for (r = h.split(leaf); r.ok; r = h.split(leaf)) leaf = r.children[0];
+      EXPECT_NE(r.reason.find("too small to split"), std::string::npos) << r.reason;
+      EXPECT_FALSE(h.can_split(leaf));
+      EXPECT_GT(h.level(leaf), 40);
+      EXPECT_LT(h.level(leaf), 60);
+      EXPECT_GT(h.area(leaf), 0.0);
+      const auto violations = check_invariants(h);
+      EXPECT_TRUE(violations.empty()) << scene.name << (balance ? " balanced: " : ": ") << describe(violations);
+    }
+  }
+}
+
 TEST(HierarchySplit, BalanceSplitsCoarserNeighboursFirst) {
   MeshingOptions o = sizes(2.0, 1.0);
   o.balance = true;
