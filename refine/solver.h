@@ -132,9 +132,10 @@ class Solver {
 
  private:
   void initialise();
-  // What the loop asks of the patches between two shots, in one pass over them (in patches() order): the unshot
-  // fraction, the shooter (the largest unshot flux sum |dB| A over channels; ties to the lowest id; kNoNode when
-  // none is left) and the ambient term.
+  // What the loop asks of the patches between two shots, in a pass over them (in patches() order; a second one with
+  // overshooting): the unshot fraction, the shooter (the largest unshot flux sum |dB| A over channels, or with
+  // overshooting the largest flux a shot would send, sum |w dB + rho x ambient| A; ties to the lowest id; kNoNode
+  // when none is left) and the ambient term.
   struct PatchScan {
     double unshot_fraction = 0.0;
     mesh::NodeId shooter = mesh::kNoNode;
