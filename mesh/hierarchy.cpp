@@ -14,8 +14,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 
 namespace aarad::mesh {
 namespace {
@@ -101,6 +103,81 @@ VertexHandle midpoint_on_chain(LeafMesh& mesh, HalfedgeHandle out_of_a, VertexHa
   return m;
 }
 
+// Faces of one surface that touch at a single point (two tiles of a checkerboard's colour meeting at a corner) share
+// that point as one vertex, and OpenMesh links their fans into a complex vertex: a vertex with two boundary gaps,
+// which the leaf mesh's invariant (leaf-mesh-manifold) forbids. Each fan of elements around such a point after the
+// first gets a copy of the point instead, as the two fans share no edge. A patch's corner follows its elements.
+void separate_pinched_fans(SurfaceMeshing& meshing) {
+  // Incidences (element, corner slot) joined across every edge two elements share, at both of its ends.
+  std::vector<std::pair<std::size_t, std::size_t>> element_of;  // flat element index -> (patch, element)
+  for (std::size_t p = 0; p < meshing.elements.size(); ++p)
+    for (std::size_t e = 0; e < meshing.elements[p].size(); ++e) element_of.emplace_back(p, e);
+  const auto corners_of = [&](std::size_t flat) -> CornerIndices& {
+    return meshing.elements[element_of[flat].first][element_of[flat].second];
+  };
+  const auto count = [](const CornerIndices& c) { return c[3] < 0 ? 3 : 4; };
+  std::vector<std::size_t> root(element_of.size() * 4);
+  for (std::size_t i = 0; i < root.size(); ++i) root[i] = i;
+  const auto find = [&](std::size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  const auto join = [&](std::size_t a, std::size_t b) { root[find(a)] = find(b); };
+  // Every directed edge a -> b with its incidence at a and at b; an undirected edge's two faces meet by its key.
+  struct EdgeEnd {
+    std::uint64_t key;
+    std::size_t at_low, at_high;  // the incidences at the edge's lower and higher point index
+  };
+  std::vector<EdgeEnd> edges;
+  for (std::size_t f = 0; f < element_of.size(); ++f) {
+    const CornerIndices& c = corners_of(f);
+    const int n = count(c);
+    for (int k = 0; k < n; ++k) {
+      const int a = c[static_cast<std::size_t>(k)], b = c[static_cast<std::size_t>((k + 1) % n)];
+      const std::size_t ia = f * 4 + static_cast<std::size_t>(k), ib = f * 4 + static_cast<std::size_t>((k + 1) % n);
+      const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
+      edges.push_back({lo << 32 | hi, a < b ? ia : ib, a < b ? ib : ia});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const EdgeEnd& x, const EdgeEnd& y) { return x.key < y.key; });
+  for (std::size_t i = 1; i < edges.size(); ++i) {
+    if (edges[i].key != edges[i - 1].key) continue;
+    join(edges[i].at_low, edges[i - 1].at_low);
+    join(edges[i].at_high, edges[i - 1].at_high);
+  }
+  // The first fan of each point keeps it; each further fan gets a copy.
+  std::vector<std::size_t> first_fan(meshing.points.size(), root.size());
+  std::vector<std::pair<std::size_t, int>> copy_of_fan;  // (fan root, new point index), few
+  for (std::size_t f = 0; f < element_of.size(); ++f) {
+    CornerIndices& c = corners_of(f);
+    for (int k = 0; k < count(c); ++k) {
+      int& v = c[static_cast<std::size_t>(k)];
+      const std::size_t fan = find(f * 4 + static_cast<std::size_t>(k));
+      std::size_t& first = first_fan[static_cast<std::size_t>(v)];
+      if (first == root.size()) first = fan;
+      if (first == fan) continue;
+      auto it = std::find_if(copy_of_fan.begin(), copy_of_fan.end(), [&](const auto& x) { return x.first == fan; });
+      if (it == copy_of_fan.end()) {
+        meshing.points.push_back(meshing.points[static_cast<std::size_t>(v)]);
+        it = copy_of_fan.insert(copy_of_fan.end(), {fan, static_cast<int>(meshing.points.size() - 1)});
+      }
+      v = it->second;
+    }
+  }
+  if (copy_of_fan.empty()) return;
+  // A patch's corners are corners of its elements: each takes the index its elements use at that point.
+  for (std::size_t p = 0; p < meshing.patches.size(); ++p) {
+    CornerIndices& corners = meshing.patches[p];
+    for (int k = 0; k < count(corners); ++k) {
+      int& v = corners[static_cast<std::size_t>(k)];
+      const Vec3 at = meshing.points[static_cast<std::size_t>(v)];
+      for (const CornerIndices& e : meshing.elements[p])
+        for (int j = 0; j < count(e); ++j)
+          if (meshing.points[static_cast<std::size_t>(e[static_cast<std::size_t>(j)])] == at) v = e[static_cast<std::size_t>(j)];
+    }
+  }
+}
+
 }  // namespace
 
 // --- Impl ---------------------------------------------------------------------------------------------------
@@ -142,8 +219,9 @@ Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(
   const double diagonal = scene.diagonal();
   for (std::uint32_t s = 0; s < scene.surfaces.size(); ++s) {
     const double limit = m.options.max_initial_elements;
-    const SurfaceMeshing meshing =
+    SurfaceMeshing meshing =
         mesh_surface(scene, s, m.options.patch_size, m.options.element_size, limit - made, limit, diagonal);
+    separate_pinched_fans(meshing);
     for (const auto& elements : meshing.elements) made += static_cast<double>(elements.size());
     const int base = static_cast<int>(m.mesh.n_vertices());
     for (const Vec3& p : meshing.points) m.mesh.add_vertex(to_point(p));

@@ -70,7 +70,9 @@ class Hierarchy {
   int corner_count(NodeId node) const;                    // 3 or 4
   void corners(NodeId node, std::vector<Vec3>& out) const;  // the same, into a reused buffer
   // Vertex indices of the corners, in the same order (the first corner_count(node) are meaningful): corners
-  // of different nodes are the same point exactly when their indices are equal.
+  // of different nodes with equal indices are the same point, and corners at the same point have equal indices
+  // except where faces of one surface touch at that point only (each fan of elements around it has its own copy,
+  // so the leaf mesh stays manifold).
   std::array<std::uint32_t, 4> corner_vertices(NodeId node) const;
   // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise. Throws
   // aarad::Error when `leaf` is not a leaf (as edge_neighbours does).

@@ -391,6 +391,40 @@ TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
 // and max_level 60 (both allowed), splitting the child at one corner over and over made children with two corners
 // at one point at level 51 (area 0, a hanging vertex on a corner, children turned clockwise); the split is
 // refused instead, with its reason, and the hierarchy stays sound, with balance too.
+// Two squares of one group that touch at one corner (the black tiles of a 2 x 2 checkerboard) are one surface.
+// Sharing the corner as one vertex made it a complex vertex of OpenMesh, with two boundary gaps, and every solve
+// of such a scene reported leaf-mesh-manifold violated; each fan now has its own copy of the point.
+TEST(Hierarchy, FacesOfASurfaceTouchingAtOnePointKeepTheLeafMeshManifold) {
+  Scene scene;
+  scene.name = "checkerboard";
+  const std::uint32_t material = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("black");
+  scene.add_face(group, material, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  scene.add_face(group, material, {{1, 1, 0}, {2, 1, 0}, {2, 2, 0}, {1, 2, 0}});
+  scene.build_surfaces();
+  ASSERT_EQ(scene.surfaces.size(), 1u);
+  Hierarchy h(scene, sizes(0.5, 0.5));
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  // The leaves at the shared point, on both squares; no edge joins the two squares.
+  std::vector<NodeId> at_point;
+  for (NodeId leaf : h.leaves()) {
+    for (const Vec3& corner : h.corners(leaf))
+      if (corner == Vec3(1.0, 1.0, 0.0)) at_point.push_back(leaf);
+  }
+  const auto upper = [&](NodeId leaf) { return h.centroid(leaf).x > 1.0; };
+  ASSERT_GE(at_point.size(), 2u);
+  EXPECT_TRUE(std::any_of(at_point.begin(), at_point.end(), upper));
+  EXPECT_FALSE(std::all_of(at_point.begin(), at_point.end(), upper));
+  for (NodeId leaf : h.leaves()) {
+    for (NodeId neighbour : h.edge_neighbours(leaf)) EXPECT_EQ(upper(leaf), upper(neighbour)) << leaf << " " << neighbour;
+  }
+  for (NodeId leaf : at_point) ASSERT_TRUE(h.split(leaf).ok);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  const std::vector<Rgb> values(h.node_count(), Rgb(1.0));
+  const auto display = check_display(h, build_display_mesh(h, values));
+  EXPECT_TRUE(display.empty()) << describe(display);
+}
+
 TEST(HierarchySplit, LeavesTooSmallForFloatingPointAreNotSplit) {
   for (const bool balance : {false, true}) {
     for (const Scene& scene : {test::polygon_scene({{1, 1}, {2, 1}, {2, 2}, {1, 2}}, "square"),
