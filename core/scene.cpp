@@ -55,8 +55,7 @@ void Scene::build_surfaces() {
   surfaces.clear();
   for (Group& g : groups) g.surfaces.clear();
   const double tolerance = kPlaneDistance * diagonal();
-  // A face joins the first surface of its group (in the order they were made) whose material and smoothing group
-  // it shares, whose normal is within kNormalDotTolerance of its own, and whose plane holds its vertices within
+  // A face joins the first surface of its group (in the order they were made) whose material it shares, whose normal is within kNormalDotTolerance of its own, and whose plane holds its vertices within
   // `tolerance`. The last two bound the surface's offset d: |n_s . v + d_s| <= tolerance with |n_s - n_f| <=
   // sqrt(2 kNormalDotTolerance) = e gives d_s within tolerance + e |v| of -n_f . v for every vertex v of the face.
   // So only the surfaces whose d lies in that window are tried (kept sorted by d): a mesh of n faces in n planes
@@ -83,7 +82,7 @@ void Scene::build_surfaces() {
         const std::uint32_t si = it->second;
         if (match && si > *match) continue;  // the first surface made wins, as a scan in order would find
         const Surface& s = surfaces[si];
-        if (s.material != face.material || s.smoothing != face.smoothing) continue;
+        if (s.material != face.material) continue;
         if (glm::dot(s.plane.normal, plane.normal) < 1.0 - kNormalDotTolerance) continue;
         const bool in_plane = std::all_of(face.vertices.begin(), face.vertices.end(), [&](const Vec3& v) {
           return std::abs(s.plane.signed_distance(v)) <= tolerance;
@@ -102,6 +101,7 @@ void Scene::build_surfaces() {
         by_offset.emplace(plane.d, *match);
       }
       Surface& s = surfaces[*match];
+      if (!s.faces.empty() && s.smoothing != face.smoothing) s.smoothing = 0;  // its faces disagree: none
       s.faces.push_back(fi);
       s.area += area(face.vertices);
       face.surface = *match;

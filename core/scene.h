@@ -52,12 +52,12 @@ struct Group {
   std::vector<std::uint32_t> surfaces;
 };
 
-// The faces of one group that lie in one plane and share one material and smoothing group. Pieces of one
-// physical surface never occlude each other (the paper's identical-z exception, section 3.2.1).
+// The faces of one group that lie in one plane and share one material. Pieces of one physical surface
+// never occlude each other (the paper's identical-z exception, section 3.2.1).
 struct Surface {
   std::uint32_t group = 0;
   std::uint32_t material = 0;
-  std::uint32_t smoothing = 0;  // the faces' smoothing group (Face::smoothing)
+  std::uint32_t smoothing = 0;  // the smoothing group all its faces have (Face::smoothing); 0 when they differ
   Plane plane;  // the front side is the lit side
   std::vector<std::uint32_t> faces;
   double area = 0.0;
@@ -99,8 +99,8 @@ class Scene {
                 std::uint32_t smoothing = 0);
 
   // Groups faces into physical surfaces (same group, same plane within a tolerance relative to the scene
-  // size, same material, same smoothing group) and fills Surface::area and Group::surfaces. Call after the
-  // last add_face.
+  // size, same material) and fills Surface::area, Surface::smoothing and Group::surfaces. Call after the last
+  // add_face.
   void build_surfaces();
 
   // Checks what every consumer relies on: at least one face, materials with rho in [0, 1) and emission in

@@ -502,8 +502,8 @@ TEST_F(SceneImport, import_coplanar_faces_of_a_group_form_one_surface) {
 }
 
 // `s N` and `s off` set the smoothing group of the faces after them (Face::smoothing), across `o` lines as OBJ
-// readers do; coplanar faces in two smoothing groups are two surfaces; a statement that is neither a whole number
-// nor `off` warns with its line; write_obj writes the groups back.
+// readers do; coplanar faces in two smoothing groups stay one physical surface (design.md), which smooths with
+// none; a statement that is neither a whole number nor `off` warns with its line; write_obj writes the groups back.
 TEST_F(SceneImport, import_smoothing_groups_are_read_per_face_and_written_back) {
   write("s.mtl", kSquareMtl);
   const std::string obj = write("smooth.obj",
@@ -529,9 +529,13 @@ TEST_F(SceneImport, import_smoothing_groups_are_read_per_face_and_written_back) 
   EXPECT_TRUE(has_warning(scene, "smooth.obj:35: smoothing statement 's smooth' not understood")) << scene.warnings.front();
   EXPECT_EQ(scene.warnings.size(), 2u) << scene.warnings.back();  // and "no face emits light"
   const Group& flat = scene.groups[*scene.find_group("flat")];
-  ASSERT_EQ(flat.surfaces.size(), 2u);  // one plane, two smoothing groups
+  ASSERT_EQ(flat.surfaces.size(), 1u);  // one plane: one surface, its faces in no group and in group 2
   EXPECT_EQ(scene.surfaces[flat.surfaces[0]].smoothing, 0u);
-  EXPECT_EQ(scene.surfaces[flat.surfaces[1]].smoothing, 2u);
+  const Group& bent = scene.groups[*scene.find_group("bent")];
+  ASSERT_EQ(bent.surfaces.size(), 3u);
+  EXPECT_EQ(scene.surfaces[bent.surfaces[0]].smoothing, 1u);
+  EXPECT_EQ(scene.surfaces[bent.surfaces[1]].smoothing, 1u);
+  EXPECT_EQ(scene.surfaces[bent.surfaces[2]].smoothing, 0u);
 
   const std::string path = (dir_ / "back.obj").string();
   write_obj(scene, path);
