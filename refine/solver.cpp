@@ -309,6 +309,9 @@ bool Solver::shoot(const PatchScan& scan) {
   for (mesh::NodeId node : factor_written_) received_factor_[node] = 0.0;
   factor_written_.clear();
   received_factor_.resize(hierarchy_.node_count(), 0.0);
+  for (mesh::NodeId node : reshaped_written_) reshaped_[node] = 0;
+  reshaped_written_.clear();
+  for (std::uint32_t receiver : near_field_.last_corrected()) mark_reshaped(cache_.leaf(receiver));
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   touched_.clear();
   const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces
@@ -498,16 +501,30 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
 
 // The pieces of a split leaf tile it, so the back ends give them together what the leaf got (the AA hemicube to
 // rounding: pieces of one surface share their pixels); the near-field correction does not, as it reshapes with
-// the pieces' own centroids. The pieces of a leaf that has a corrected one are scaled to its factor, so the flux
-// taken back from the leaf is given out again in full: the balance holds through splits.
+// the pieces' own centroids. The pieces of a leaf that has a corrected one, or whose own factor was not the back
+// end's (corrected, or scaled here in an earlier round of splits), are scaled to its factor, so the flux taken back
+// from the leaf is given out again in full: the balance holds through splits. (A corrected leaf on the edge of the
+// near field may have no corrected piece: its centroid is within reach of the shooter and theirs are not.)
+void Solver::mark_reshaped(mesh::NodeId node) {
+  if (node >= reshaped_.size()) reshaped_.resize(hierarchy_.node_count(), 0);
+  if (reshaped_[node] != 0) return;
+  reshaped_[node] = 1;
+  reshaped_written_.push_back(node);
+}
+
 void Solver::share_out_corrected_factors(mesh::NodeId first_new) {
   const auto ancestor_of = [&](mesh::NodeId leaf) {
     mesh::NodeId ancestor = leaf;  // the node that was a leaf when the shot was received
     while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
     return ancestor;
   };
-  std::vector<mesh::NodeId> reshaped;  // split leaves with a corrected piece
+  std::vector<mesh::NodeId> reshaped;  // split leaves reshaped themselves or with a corrected piece
   for (std::uint32_t receiver : near_field_.last_corrected()) reshaped.push_back(ancestor_of(cache_.leaf(receiver)));
+  for (std::uint32_t receiver : subset_) {
+    const mesh::NodeId ancestor = ancestor_of(cache_.leaf(receiver));
+    if (ancestor < reshaped_.size() && reshaped_[ancestor] != 0) reshaped.push_back(ancestor);
+  }
+  if (reshaped.empty()) return;
   std::sort(reshaped.begin(), reshaped.end());
   reshaped.erase(std::unique(reshaped.begin(), reshaped.end()), reshaped.end());
   std::vector<double> total(reshaped.size(), 0.0);
@@ -522,7 +539,10 @@ void Solver::share_out_corrected_factors(mesh::NodeId first_new) {
   for (std::uint32_t receiver : subset_) {
     const mesh::NodeId ancestor = ancestor_of(cache_.leaf(receiver));
     const std::size_t k = slot(ancestor);
-    if (k < reshaped.size() && total[k] > 0.0) ff_[receiver] *= received_factor_[ancestor] / total[k];
+    if (k < reshaped.size()) {
+      if (total[k] > 0.0) ff_[receiver] *= received_factor_[ancestor] / total[k];
+      mark_reshaped(cache_.leaf(receiver));
+    }
   }
 }
 
@@ -551,7 +571,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     if (!subset_.empty()) {
       ff_.assign(cache_.size(), 0.0);
       compute_form_factors(shooter, subset_);
-      if (!near_field_.last_corrected().empty()) share_out_corrected_factors(first_new);
+      if (near_field_.reach() > 0.0) share_out_corrected_factors(first_new);
     }
     start = Clock::now();
     take_back_split_shares(split_nodes, first_new, new_leaves, shot_flux);
