@@ -36,6 +36,25 @@ double unoccluded_factor(const Vec3& point, const Vec3& normal, std::span<const 
   return std::max(0.0, formfactor::polygon_form_factor(Vec3(0.0), Vec3(0.0, 0.0, 1.0), visible));
 }
 
+// The part of `polygon` on the front of the plane through `origin` with unit normal `normal` (Sutherland-Hodgman),
+// into `out`; empty when less than a polygon is left.
+void clip_to_front_of(std::span<const Vec3> polygon, const Vec3& origin, const Vec3& normal, std::vector<Vec3>& out) {
+  out.clear();
+  const std::size_t m = polygon.size();
+  Vec3 previous = polygon[m - 1];
+  double previous_height = glm::dot(normal, previous - origin);
+  for (std::size_t v = 0; v < m; ++v) {
+    const Vec3 current = polygon[v];
+    const double height = glm::dot(normal, current - origin);
+    if ((previous_height < 0.0) != (height < 0.0) && previous_height != height)
+      out.push_back(previous + (previous_height / (previous_height - height)) * (current - previous));
+    if (height >= 0.0) out.push_back(current);
+    previous = current;
+    previous_height = height;
+  }
+  if (out.size() < 3) out.clear();
+}
+
 }  // namespace
 
 void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span<const double> radii) {
@@ -153,10 +172,25 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
         unoccluded += shooter.weights[p] * unoccluded_factor(shooter.points[p], shooter.normal, polygon, local_, clipped_);
     }
     const double seen = unoccluded > 0.0 ? std::min(1.0, ff[i] / unoccluded) : 1.0;
+    // A receiver crossing the patch's plane (a wall through a shelf's plane): only its part in front of the patch
+    // sees it, and that part's centroid stands for it. The receiver's own centroid may lie behind the patch
+    // (which it then does not see at all) or just in front of it, at the junction, where the factor is largest.
+    double front_area = area;
+    Vec3 front_centroid = centroid;
+    bool crosses = false;
+    for (const Vec3& corner : polygon)
+      crosses |= glm::dot(shooter.normal, corner - shooter.centroid) < -1e-9 * receiver_radius;
+    if (crosses) {
+      clip_to_front_of(polygon, shooter.centroid, shooter.normal, front_);
+      front_area = front_.empty() ? 0.0 : aarad::area(front_);
+      if (front_area > 0.0) front_centroid = aarad::centroid(front_);
+    }
     const double from_receiver =
-        unoccluded_factor(centroid, receivers.plane(i).normal, shooter.polygon, local_, clipped_);
+        front_area > 0.0
+            ? unoccluded_factor(front_centroid, receivers.plane(i).normal, shooter.polygon, local_, clipped_)
+            : 0.0;
     near_.push_back(i);
-    shaped_.push_back(seen * from_receiver * area / shooter.area);
+    shaped_.push_back(seen * from_receiver * front_area / shooter.area);
     back_end_total += ff[i];
     shaped_total += shaped_.back();
   }

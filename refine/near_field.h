@@ -17,8 +17,9 @@
 // smaller of the two, even where they touch. So a receiver e whose centroid lies within `reach` times the patch's
 // radius (its farthest corner from its centroid) of the patch's centroid, and whose own radius is at most 3/4 of
 // the patch's, gets
-//     G_e = v_e F(dA_e -> A_s) A_e / A_s,
-// where v_e, the fraction of e the back end saw, is its factor over its factor with nothing occluding on the same
+//     G_e = v_e F(dA_e -> A_s) A_e / A_s
+// (for a receiver crossing the patch's plane, A_e and the point of dA_e are the area and centroid of its part in
+// front of the patch: its own centroid may lie behind the patch, or just in front at the junction), where v_e, the fraction of e the back end saw, is its factor over its factor with nothing occluding on the same
 // pixels (FormFactorBackend::add_unoccluded; exact when the back end cannot say), clamped to [0, 1], so the back
 // end's occlusion is kept and its discretisation error is not (the AA hemicube gives an element at a junction,
 // seen edge on through the bottom row of a side face, about half its factor: the cosine kernel, zero at the
@@ -124,7 +125,7 @@ class NearFieldCorrection {
   std::vector<std::uint32_t> near_;
   std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)
   std::vector<double> shaped_;  // per near receiver: G
-  std::vector<Vec3> local_, clipped_;
+  std::vector<Vec3> local_, clipped_, front_;
 };
 
 }  // namespace aarad::refine

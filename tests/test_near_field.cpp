@@ -296,6 +296,35 @@ TEST(NearField, HiddenPartsStayHidden) {
   }
 }
 
+// A wall element crossing the shooting patch's plane (a wall running past a shelf): only its part in front of the
+// patch sees it. Taken from the element's own centroid, its factor was 0 with the centroid 0.01 below the plane,
+// and 0.123 with it 0.01 above (seen from the junction, the patch fills half the hemisphere), against the exact
+// 0.0485 and 0.0515; the far field paid for the excess (scaled by 0.90).
+TEST(NearField, ReceiversCrossingThePatchsPlaneAreShapedByTheirPartInFront) {
+  const Polygon floor = rectangle(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0));  // facing +z
+  for (const double lift : {-0.01, 0.01, -0.2}) {
+    ReceiverView view;
+    // Wall x = 1 facing -x: the element y in [0.25, 0.75], z in [-0.25, 0.25] + lift, and one above it.
+    const double low = -0.25 + lift, high = 0.25 + lift;
+    const std::uint32_t crossing =
+        add_surface(view, {rectangle(Vec3(1, 0.25, low), Vec3(0, 0, high - low), Vec3(0, 0.5, 0)),
+                           rectangle(Vec3(1, 0.25, high), Vec3(0, 0, 0.5), Vec3(0, 0.5, 0))},
+                    1, 10)[0];
+    add_surface(view, grid(Vec3(-19.5, -19.5, 4), Vec3(0, 40, 0), Vec3(40, 0, 0), 2, 2), 2, 200);
+    formfactor::AnalyticBackend backend;
+    const std::vector<Vec3> points{Vec3(0.5, 0.5, 1e-9)};
+    const std::vector<double> weights{1.0};
+    std::vector<double> ff(view.size(), 0.0);
+    backend.compute(formfactor::Shooter::from_normal(points[0], Vec3(0, 0, 1)), view, {}, ff);
+    NearFieldCorrection correction(4.0);
+    correction.apply({floor, Vec3(0.5, 0.5, 0.0), Vec3(0, 0, 1), 1.0, points, weights, {}}, view, {}, ff);
+    const double front = std::max(0.0, low);
+    const double exact = patch_to_element(floor, 1.0, Vec3(1, 0.25, front), Vec3(0, 0, high - front),
+                                          Vec3(0, 0.5, 0), Vec3(-1, 0, 0));
+    EXPECT_NEAR(ff[crossing], exact, 0.03 * exact) << "lift " << lift;
+  }
+}
+
 // A leaf on the edge of the near field, split in the shot that corrected it, can have no corrected piece: its
 // centroid lies within reach of the shooter's centroid and its pieces' centroids, a quarter of it off to every
 // side, do not. Its pieces got the back end's factors (times the far field's scale), not the corrected factor
