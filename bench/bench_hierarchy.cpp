@@ -4,7 +4,8 @@
 // Reported: time per split (thread CPU time of split() calls only, balance splits included in the count) and bytes per leaf
 // (heap growth from mallinfo2, and the hierarchy's own container count). Goals (issue 4): time per split
 // within 1.5x across the sizes, under 1 KiB per leaf. Also: building the surfaces and the hierarchy of a scene of
-// many surfaces (BM_BuildTerrain).
+// many surfaces (BM_BuildTerrain), and the check for faces lying on one another in a scene of many coplanar
+// surfaces (BM_CoplanarOverlapsCubes).
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
 
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <ctime>
 #include <deque>
+#include <string>
 #include <limits>
 
 namespace {
@@ -134,6 +136,42 @@ void BM_BuildTerrain(benchmark::State& state) {
 }
 
 BENCHMARK(BM_BuildTerrain)->Arg(50)->Arg(100)->Arg(200)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// Many surfaces in one plane: n cubes of side 0.1 on a square grid of spacing 0.3, each cube its own group (the
+// tops of all n share the plane y = 0.1, the bottoms y = 0): the check for faces lying on one another
+// (Scene::coplanar_overlaps, run by the OBJ importer). It tested every pair of surfaces of one plane and flattened
+// both of each pair, quadratic (20 000 cubes: 5 minutes and 4 GB); the time per surface should stay about the same.
+void BM_CoplanarOverlapsCubes(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  aarad::Scene scene;
+  scene.name = "cubes";
+  const std::uint32_t grey = scene.add_material(aarad::Material{"grey", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  const int k = static_cast<int>(std::ceil(std::sqrt(n)));
+  for (int q = 0; q < n; ++q) {
+    const std::uint32_t group = scene.add_group("cube" + std::to_string(q));
+    const Vec3 o(0.3 * (q % k), 0.0, 0.3 * (q / k));
+    const auto p = [&](int x, int y, int z) { return o + 0.1 * Vec3(x, y, z); };
+    scene.add_face(group, grey, {p(0, 0, 0), p(0, 0, 1), p(0, 1, 1), p(0, 1, 0)});
+    scene.add_face(group, grey, {p(1, 0, 0), p(1, 1, 0), p(1, 1, 1), p(1, 0, 1)});
+    scene.add_face(group, grey, {p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1)});
+    scene.add_face(group, grey, {p(0, 1, 0), p(0, 1, 1), p(1, 1, 1), p(1, 1, 0)});
+    scene.add_face(group, grey, {p(0, 0, 0), p(0, 1, 0), p(1, 1, 0), p(1, 0, 0)});
+    scene.add_face(group, grey, {p(0, 0, 1), p(1, 0, 1), p(1, 1, 1), p(0, 1, 1)});
+  }
+  scene.build_surfaces();
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const double t0 = thread_seconds();
+    const auto overlaps = scene.coplanar_overlaps();
+    seconds += thread_seconds() - t0;
+    benchmark::DoNotOptimize(overlaps.size());
+  }
+  const double surfaces = static_cast<double>(scene.surfaces.size());
+  state.counters["surfaces"] = surfaces;
+  state.counters["us_per_surface"] = 1e6 * seconds / static_cast<double>(state.iterations()) / surfaces;
+}
+
+BENCHMARK(BM_CoplanarOverlapsCubes)->Arg(1000)->Arg(4000)->Arg(16000)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

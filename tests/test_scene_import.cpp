@@ -565,6 +565,74 @@ TEST(SceneSurfaces, AFaceFarFromTheOriginJoinsASurfaceWhoseOffsetDiffersByItsTil
   }
 }
 
+// coplanar_overlaps compares only surfaces whose bounds overlap on the two axes that project_to_2d keeps for the
+// pair's first surface. A 30 x 30 grid of square tiles in one plane (900 surfaces, one group each, of two halves,
+// touching along edges: no overlap) with a rug on two of them: exactly those overlaps, with their areas and lines.
+TEST(SceneSurfaces, OverlapsAmongManySurfacesOfOnePlaneAreTheOnesThatMeet) {
+  Scene scene;
+  scene.name = "tiles";
+  const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  for (int j = 0; j < 30; ++j)
+    for (int i = 0; i < 30; ++i) {
+      const int line = 2 * (30 * j + i) + 1;
+      const std::uint32_t tile = scene.add_group("tile" + std::to_string(line));
+      const double x = i, z = j;
+      scene.add_face(tile, grey, {{x, 0, z}, {x, 0, z + 1}, {x + 0.5, 0, z + 1}, {x + 0.5, 0, z}}, line);
+      scene.add_face(tile, grey, {{x + 0.5, 0, z}, {x + 0.5, 0, z + 1}, {x + 1, 0, z + 1}, {x + 1, 0, z}}, line + 1);
+    }
+  // Rugs: on the second half of tile (3, 1) only (lines 67, 68), and across tiles (20, 25) and (21, 25)
+  // (lines 1541-1544).
+  scene.add_face(scene.add_group("rug a"), grey, {{3.6, 0, 1.1}, {3.6, 0, 1.3}, {3.9, 0, 1.3}, {3.9, 0, 1.1}}, 2001);
+  scene.add_face(scene.add_group("rug b"), grey, {{20.5, 0, 25.5}, {20.5, 0, 26}, {21.75, 0, 26}, {21.75, 0, 25.5}}, 2002);
+  scene.build_surfaces();
+  ASSERT_EQ(scene.surfaces.size(), 902u);
+  const std::vector<Scene::CoplanarOverlap> found = scene.coplanar_overlaps();
+  ASSERT_EQ(found.size(), 3u);
+  EXPECT_EQ(found[0].a, 33u);  // tile (3, 1)
+  EXPECT_EQ(found[0].b, 900u);
+  EXPECT_NEAR(found[0].area, 0.06, 1e-12);
+  EXPECT_EQ(found[0].line_a, 68);
+  EXPECT_EQ(found[0].line_b, 2001);
+  EXPECT_EQ(found[1].a, 770u);  // tile (20, 25)
+  EXPECT_EQ(found[1].b, 901u);
+  EXPECT_NEAR(found[1].area, 0.25, 1e-12);
+  EXPECT_EQ(found[2].a, 771u);  // tile (21, 25)
+  EXPECT_EQ(found[2].b, 901u);
+  EXPECT_NEAR(found[2].area, 0.375, 1e-12);
+}
+
+// Two faces on one another in a plane at 45 degrees between the x and y axes, tilted by 2e-7 radians either way
+// (within the normal tolerance): the first surface's normal has its largest component along one axis and the
+// other's along the other, so project_to_2d drops different axes for them. The overlap is found with either one
+// first.
+TEST(SceneSurfaces, OverlapsAreFoundBetweenSurfacesWhoseNormalsLeanToDifferentAxes) {
+  for (const bool x_first : {true, false}) {
+    Scene scene;
+    scene.name = "diagonal";
+    const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+    const auto square = [](double lean, double lo, double hi) {
+      // In the plane through the origin with normal (1, 1 + lean, 0) (unnormalised): x = -(1 + lean) y.
+      std::vector<Vec3> v;
+      for (const auto& [y, z] : {std::pair{lo, lo}, std::pair{hi, lo}, std::pair{hi, hi}, std::pair{lo, hi}})
+        v.push_back(Vec3(-(1.0 + lean) * y, y, z));
+      return v;
+    };
+    const double first = x_first ? -4e-7 : 4e-7;
+    scene.add_face(scene.add_group("a"), grey, square(first, 0.0, 1.0));
+    scene.add_face(scene.add_group("b"), grey, square(-first, 0.5, 1.5));
+    scene.build_surfaces();
+    ASSERT_EQ(scene.surfaces.size(), 2u);
+    const Vec3 na = glm::abs(scene.surfaces[0].plane.normal), nb = glm::abs(scene.surfaces[1].plane.normal);
+    EXPECT_EQ(na.x > na.y, x_first);  // the two lean to different axes
+    EXPECT_EQ(nb.x > nb.y, !x_first);
+    const std::vector<Scene::CoplanarOverlap> found = scene.coplanar_overlaps();
+    ASSERT_EQ(found.size(), 1u) << "x first " << x_first;
+    EXPECT_EQ(found[0].a, 0u);
+    EXPECT_EQ(found[0].b, 1u);
+    EXPECT_NEAR(found[0].area, 0.25, 1e-6);  // measured in the projection that drops x or y
+  }
+}
+
 TEST_F(SceneImport, import_faces_on_one_another_in_one_plane_warn_with_their_lines) {
   write("s.mtl", kSquareMtl);
   const std::string obj = write("rug.obj",
