@@ -4,7 +4,7 @@
 // Reported: time per split (thread CPU time of split() calls only, balance splits included in the count) and bytes per leaf
 // (heap growth from mallinfo2, and the hierarchy's own container count). Goals (issue 4): time per split
 // within 1.5x across the sizes, under 1 KiB per leaf. Also: building the surfaces and the hierarchy of a scene of
-// many surfaces (BM_BuildTerrain), and the check for faces lying on one another in a scene of many coplanar
+// many surfaces (BM_BuildTerrain) and of a tessellated ball (BM_BuildSurfacesBall), and the check for faces lying on one another in a scene of many coplanar
 // surfaces (BM_CoplanarOverlapsCubes).
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
@@ -136,6 +136,42 @@ void BM_BuildTerrain(benchmark::State& state) {
 }
 
 BENCHMARK(BM_BuildTerrain)->Arg(50)->Arg(100)->Arg(200)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// A ball: a unit sphere about the origin tessellated into n rings of 2n quads, each cut into two triangles (one
+// at the poles), one group and one smoothing group: 4 n^2 - 2 n faces, each in a plane of its own, every plane at
+// about the same distance from the origin, so with about the same offset d. Grouping them into surfaces
+// (Scene::build_surfaces) tried every surface whose d lay within a face's window, nearly all of them (160 000
+// triangles: 89 s); the time per face should stay about the same.
+void BM_BuildSurfacesBall(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  aarad::Scene scene;
+  scene.name = "ball";
+  const std::uint32_t grey = scene.add_material(aarad::Material{"grey", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("ball");
+  const double pi = std::acos(-1.0);
+  const auto point = [&](int ring, int column) {
+    const double theta = pi * ring / n, phi = 2.0 * pi * column / (2 * n);
+    return Vec3(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+  };
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < 2 * n; ++c) {
+      if (r > 0) scene.add_face(group, grey, {point(r, c), point(r, c + 1), point(r + 1, c + 1)}, 0, 1);
+      if (r < n - 1) scene.add_face(group, grey, {point(r, c), point(r + 1, c + 1), point(r + 1, c)}, 0, 1);
+    }
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const double t0 = thread_seconds();
+    scene.build_surfaces();
+    seconds += thread_seconds() - t0;
+    benchmark::DoNotOptimize(scene.surfaces.size());
+  }
+  const double faces = static_cast<double>(scene.faces.size());
+  state.counters["faces"] = faces;
+  state.counters["surfaces"] = static_cast<double>(scene.surfaces.size());
+  state.counters["us_per_face"] = 1e6 * seconds / static_cast<double>(state.iterations()) / faces;
+}
+
+BENCHMARK(BM_BuildSurfacesBall)->Arg(50)->Arg(100)->Arg(200)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // Many surfaces in one plane: n cubes of side 0.1 on a square grid of spacing 0.3, each cube its own group (the
 // tops of all n share the plane y = 0.1, the bottoms y = 0): the check for faces lying on one another

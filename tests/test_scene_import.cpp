@@ -565,6 +565,30 @@ TEST(SceneSurfaces, AFaceFarFromTheOriginJoinsASurfaceWhoseOffsetDiffersByItsTil
   }
 }
 
+// build_surfaces looks a face's surface up among those whose normal lies in the same cell of 1e-4 per coordinate as
+// the face's, or in a neighbouring one when the face's normal is near a cell's side. Two triangles in the planes
+// through the z axis with normals (0.6, 0.8, 0) turned by -+5e-7 radians about z (their normals' x and y on either
+// side of 0.6 and 0.8, cell sides; 1e-6 radians apart, within the normal tolerance, and their vertices within
+// 1e-6 of each other's plane, within the distance tolerance) join one surface, with either one first. Turned
+// -+5e-5 radians they are two.
+TEST(SceneSurfaces, FacesWhoseNormalsLieEitherSideOfABinsEdgeJoinOneSurface) {
+  for (const double turn : {5e-7, -5e-7, 5e-5}) {
+    Scene scene;
+    scene.name = "turned";
+    const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+    const std::uint32_t group = scene.add_group("panel");
+    const double base = std::atan2(0.8, 0.6);
+    for (const double angle : {base - turn, base + turn}) {
+      const Vec3 n(std::cos(angle), std::sin(angle), 0.0), along(-n.y, n.x, 0.0), up(0, 0, 1);
+      scene.add_face(group, grey, {0.1 * along, 0.9 * along, 0.5 * along + 0.8 * up});
+    }
+    scene.build_surfaces();
+    const Vec3 a = plane_of(scene.faces[0].vertices).normal, b = plane_of(scene.faces[1].vertices).normal;
+    EXPECT_EQ(a.x < 0.6, b.x > 0.6) << "turn " << turn;
+    EXPECT_EQ(scene.surfaces.size(), std::abs(turn) < 1e-6 ? 1u : 2u) << "turn " << turn;
+  }
+}
+
 // coplanar_overlaps compares only surfaces whose bounds overlap on the two axes that project_to_2d keeps for the
 // pair's first surface. A 30 x 30 grid of square tiles in one plane (900 surfaces, one group each, of two halves,
 // touching along edges: no overlap) with a rug on two of them: exactly those overlaps, with their areas and lines.
