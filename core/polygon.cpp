@@ -118,12 +118,15 @@ bool contains(std::span<const Vec2> polygon, const Vec2& p) {
   return in;
 }
 
+int dropped_axis(const Vec3& n) {
+  const Vec3 a = glm::abs(n);
+  if (a.x >= a.y && a.x >= a.z) return 0;
+  return a.y >= a.z ? 1 : 2;
+}
+
 void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2> out) {
   // Drop the dominant axis of n; swap the remaining two when needed to keep the winding.
-  const Vec3 a = glm::abs(n);
-  int drop = 2;
-  if (a.x >= a.y && a.x >= a.z) drop = 0;
-  else if (a.y >= a.z) drop = 1;
+  const int drop = dropped_axis(n);
   const int u = (drop + 1) % 3, v = (drop + 2) % 3;
   const bool flip = n[drop] < 0.0;
   for (std::size_t i = 0; i < polygon.size(); ++i) {

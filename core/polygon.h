@@ -41,8 +41,11 @@ void ear_clip(std::span<const Vec2> polygon, std::vector<std::array<std::size_t,
 // Area of the intersection of two convex polygons, both counter-clockwise (Sutherland-Hodgman, in doubles).
 double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b);
 
-// Projects a planar 3D polygon onto the coordinate plane most orthogonal to `n`, keeping the winding
-// seen from the tip of n counter-clockwise in 2D.
+// The axis that project_to_2d drops for normal `n`: its largest component (0, 1, 2 for x, y, z; ties to the
+// lower axis).
+int dropped_axis(const Vec3& n);
+// Projects a planar 3D polygon onto the coordinate plane most orthogonal to `n` (dropping dropped_axis(n)),
+// keeping the winding seen from the tip of n counter-clockwise in 2D.
 void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2> out);
 
 }  // namespace aarad

@@ -272,11 +272,6 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
   // bounds there do not overlap strictly. So a pair whose surfaces' bounds on those two axes are disjoint or only
   // touch adds exactly nothing; the pairs left are found by intersecting boxes (CGAL's box_intersection_d), per
   // dropped axis k, of those two axes' bounds and of d +- the window.
-  const auto dropped = [](const Vec3& n) {  // as project_to_2d picks it
-    const Vec3 a = glm::abs(n);
-    if (a.x >= a.y && a.x >= a.z) return 0;
-    return a.y >= a.z ? 1 : 2;
-  };
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
   std::vector<Box> boxes;
   for (int k = 0; k < 3; ++k) {
@@ -302,7 +297,7 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
     }
     CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& x, const Box& y) {
       std::uint32_t si = x.info(), ti = y.info();
-      if (dropped(surfaces[std::min(si, ti)].plane.normal) != k) return;  // that pair's axes are another k's
+      if (dropped_axis(surfaces[std::min(si, ti)].plane.normal) != k) return;  // that pair's axes are another k's
       if (position[ti] < position[si]) std::swap(si, ti);
       const Surface& s = surfaces[si];
       const Surface& t = surfaces[ti];
