@@ -36,23 +36,22 @@ double unoccluded_factor(const Vec3& point, const Vec3& normal, std::span<const 
   return std::max(0.0, formfactor::polygon_form_factor(Vec3(0.0), Vec3(0.0, 0.0, 1.0), visible));
 }
 
-// The part of `polygon` on the front of the plane through `origin` with unit normal `normal` (Sutherland-Hodgman),
-// into `out`; empty when less than a polygon is left.
-void clip_to_front_of(std::span<const Vec3> polygon, const Vec3& origin, const Vec3& normal, std::vector<Vec3>& out) {
+// The part of `polygon` in front of the plane through `origin` with unit normal `normal`, clipped as the back ends
+// clip (formfactor::clip_to_front, in that plane's frame), back in scene coordinates into `out`; empty when less
+// than a polygon is left. `local` and `clipped` are scratch.
+void clip_to_front_of(std::span<const Vec3> polygon, const Vec3& origin, const Vec3& normal, std::vector<Vec3>& local,
+                      std::vector<Vec3>& clipped, std::vector<Vec3>& out) {
+  const formfactor::Shooter frame = formfactor::Shooter::from_normal(origin, normal);
+  local.resize(polygon.size());
+  clipped.resize(formfactor::plane_clipped_capacity(polygon.size()));
+  for (std::size_t v = 0; v < polygon.size(); ++v) local[v] = formfactor::to_local(frame, polygon[v]);
+  const std::size_t m = formfactor::clip_to_front(local, clipped);
   out.clear();
-  const std::size_t m = polygon.size();
-  Vec3 previous = polygon[m - 1];
-  double previous_height = glm::dot(normal, previous - origin);
+  if (m < 3) return;
   for (std::size_t v = 0; v < m; ++v) {
-    const Vec3 current = polygon[v];
-    const double height = glm::dot(normal, current - origin);
-    if ((previous_height < 0.0) != (height < 0.0) && previous_height != height)
-      out.push_back(previous + (previous_height / (previous_height - height)) * (current - previous));
-    if (height >= 0.0) out.push_back(current);
-    previous = current;
-    previous_height = height;
+    const Vec3& q = clipped[v];
+    out.push_back(frame.centre + q.x * frame.tangent + q.y * frame.bitangent + q.z * frame.normal);
   }
-  if (out.size() < 3) out.clear();
 }
 
 }  // namespace
@@ -181,7 +180,7 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
     for (const Vec3& corner : polygon)
       crosses |= glm::dot(shooter.normal, corner - shooter.centroid) < -1e-9 * receiver_radius;
     if (crosses) {
-      clip_to_front_of(polygon, shooter.centroid, shooter.normal, front_);
+      clip_to_front_of(polygon, shooter.centroid, shooter.normal, local_, clipped_, front_);
       front_area = front_.empty() ? 0.0 : aarad::area(front_);
       if (front_area > 0.0) front_centroid = aarad::centroid(front_);
     }
