@@ -23,6 +23,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 
 namespace aarad::mesh {
@@ -53,6 +54,21 @@ Frame frame_of(const Plane& plane, const Vec3& origin) {
 
 // Pieces of at most `size` along `length`, as a double (it is checked against the budget before it becomes an int).
 double divisions(double length, double size) { return std::max(1.0, std::ceil(length / size - 1e-9)); }
+
+// The point k / n of the way from p to q, 0 <= k <= n. Two surfaces meeting along an edge are meshed apart, and
+// where both grids put a point at the same place on it the two points must be bit-identical: a hemicube pixel
+// centre on the edge's projection would otherwise fall in a gap a rounding wide that no receiver claims
+// (formfactor/hemicube.cpp's fill rule covers shared edges, not edges a rounding apart). So the point is computed
+// from the lexicographically smaller end, whichever way round the caller walks the edge, and the parameter is a
+// correctly rounded quotient, equal for equal fractions (2 / 6 and 1 / 3 alike).
+Vec3 point_along(const Vec3& p, const Vec3& q, int k, int n) {
+  if (k == 0) return p;
+  if (k == n) return q;
+  const bool flipped = std::tie(q.x, q.y, q.z) < std::tie(p.x, p.y, p.z);
+  const Vec3& from = flipped ? q : p;
+  const Vec3& to = flipped ? p : q;
+  return from + (static_cast<double>(flipped ? n - k : k) / n) * (to - from);
+}
 
 // The count limit of one surface's meshing: what MeshingOptions::max_initial_elements leaves after the surfaces
 // meshed before it. Counts are checked, in doubles, before anything is allocated.
@@ -102,7 +118,11 @@ SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, doub
   for (int j = 0; j <= gy; ++j)
     for (int i = 0; i <= gx; ++i) {
       const double s = static_cast<double>(i) / gx, t = static_cast<double>(j) / gy;
-      out.points.push_back((1 - s) * (1 - t) * c[0] + s * (1 - t) * c[1] + s * t * c[2] + (1 - s) * t * c[3]);
+      if (j == 0) out.points.push_back(point_along(c[0], c[1], i, gx));
+      else if (j == gy) out.points.push_back(point_along(c[3], c[2], i, gx));
+      else if (i == 0) out.points.push_back(point_along(c[0], c[3], j, gy));
+      else if (i == gx) out.points.push_back(point_along(c[1], c[2], j, gy));
+      else out.points.push_back((1 - s) * (1 - t) * c[0] + s * (1 - t) * c[1] + s * t * c[2] + (1 - s) * t * c[3]);
     }
   auto index = [&](int i, int j) { return j * (gx + 1) + i; };
   for (int pj = 0; pj < ny; ++pj)
@@ -170,8 +190,8 @@ std::optional<std::vector<Vec3>> convex_outline(const Scene& scene, const Surfac
 }
 
 // Divides every triangle patch into m x m similar triangles, m the same over the surface so patches sharing
-// an edge conform. Points on a patch edge are computed from the edge's lower-index end, so both patches get
-// bit-identical points.
+// an edge conform. Points on a patch edge are made once per edge (keyed by its ends' indices) by point_along, so
+// both patches share them, and a neighbouring surface whose patch has the same edge ends gets the same points.
 void divide_triangle_patches(SurfaceMeshing& out, double element_size, const Budget& budget) {
   double longest = 0.0;
   for (const CornerIndices& patch : out.patches)
@@ -190,9 +210,8 @@ void divide_triangle_patches(SurfaceMeshing& out, double element_size, const Bud
     auto [it, inserted] = edge_points.try_emplace({lo, hi});
     if (inserted)
       for (int i = 1; i < m; ++i) {
-        const double t = static_cast<double>(i) / m;
         it->second.push_back(static_cast<int>(out.points.size()));
-        out.points.push_back((1 - t) * out.points[lo] + t * out.points[hi]);
+        out.points.push_back(point_along(out.points[lo], out.points[hi], i, m));
       }
     return it->second[flipped ? m - k - 1 : k - 1];
   };
@@ -239,7 +258,10 @@ SurfaceMeshing mesh_triangle(std::span<const Vec3> c, double patch_size, double 
     row_start.push_back(static_cast<int>(out.points.size()));
     for (int i = 0; i + j <= n; ++i) {
       const double s = static_cast<double>(i) / n, t = static_cast<double>(j) / n;
-      out.points.push_back(i + j == n && j == 0 ? c[1] : (j == n ? c[2] : c[0] + s * (c[1] - c[0]) + t * (c[2] - c[0])));
+      if (j == 0) out.points.push_back(point_along(c[0], c[1], i, n));
+      else if (i == 0) out.points.push_back(point_along(c[0], c[2], j, n));
+      else if (i + j == n) out.points.push_back(point_along(c[1], c[2], j, n));
+      else out.points.push_back(c[0] + s * (c[1] - c[0]) + t * (c[2] - c[0]));
     }
   }
   auto at = [&](int i, int j) { return row_start[static_cast<std::size_t>(j)] + i; };
