@@ -52,18 +52,33 @@ std::vector<std::string> split_tokens(const std::string& line) {
 // ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would read as part of it. Group and material
 // definitions keep a '#' ("o Chair #1", "newmtl Oak #2"); whole-line comments stay (the "# aarad" lines are
 // read from them); every line keeps its number. `fo`, an older spelling of the face statement `f`, is read as `f`
-// (tinyobjloader passes over it, and its faces would vanish without a word).
+// (tinyobjloader passes over it, and its faces would vanish without a word). A statement whose line ends with a
+// backslash goes on on the next line (Wavefront's OBJ specification, appendix B1, "\" line continuation): it is
+// joined into one line under the number of its first, and an empty line stands in for each line joined to it, so
+// the lines after it keep their numbers. Comment lines are not continued.
 std::string clean_text(std::istream& in) {
   static const std::set<std::string> kCommentAfter{"v",  "vt", "vn", "vp", "f",  "l",  "p", "s",  "mtllib", "usemtl",
                                               "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr", "illum"};
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
   if (text.find('\n') == std::string::npos) std::replace(text.begin(), text.end(), '\r', '\n');
+  // Where the backslash that continues `line` is (the last character but blanks and a CR), or npos.
+  const auto continuation = [](const std::string& line) {
+    const auto first = line.find_first_not_of(" \t");
+    const auto last = line.find_last_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#' || line[last] != '\\') return std::string::npos;
+    return last;
+  };
   std::string out;
   out.reserve(text.size() + 1);
   std::istringstream lines(text);
-  std::string line;
+  std::string line, next;
   while (std::getline(lines, line)) {
+    std::size_t joined = 0;
+    for (auto at = continuation(line); at != std::string::npos && std::getline(lines, next); at = continuation(line)) {
+      line.replace(at, std::string::npos, " " + next);
+      ++joined;
+    }
     const auto first = line.find_first_not_of(" \t");
     auto key_end = first == std::string::npos ? first : line.find_first_of(" \t", first);
     if (first != std::string::npos && line.substr(first, key_end - first) == "fo") {
@@ -79,7 +94,7 @@ std::string clean_text(std::istream& in) {
       }
     }
     out += line;
-    out += '\n';
+    out.append(joined + 1, '\n');
   }
   return out;
 }

@@ -31,7 +31,8 @@
 // and another the meshing sizes the scene was made for (Scene::meshing, used by refine::default_meshing):
 //   # aarad meshing: patch_size P element_size E min_area A
 // (the three in any order; one left out, or 0, is picked from the scene's size). The file's text is read
-// without a leading UTF-8 byte-order mark and without comments after a statement ("f 1 2 3 # lid"), and `fo`,
+// without a leading UTF-8 byte-order mark and without comments after a statement ("f 1 2 3 # lid"), with a
+// statement whose line ends in a backslash continued on the next line (errors name its first line), and `fo`,
 // an older spelling of `f`, as `f`; a face repeating an earlier one (the same vertices the same way round) is
 // skipped with a warning, and so is a second definition of a material. A statement that OBJ does not have warns
 // once, with its first line.

@@ -719,6 +719,36 @@ TEST_F(SceneImport, import_byte_order_marks_and_trailing_comments_are_read_as_te
   EXPECT_DOUBLE_EQ(scene.total_area(), 2.0);
 }
 
+// A backslash at the end of a line continues the statement on the next (the OBJ specification's line
+// continuation), in OBJ and MTL files, with CRLF line ends too: the face was an error ("face vertex '\' is not a
+// vertex reference"). Lines after a continued statement keep their numbers, and an error inside one names its
+// first line; a comment ending in a backslash does not swallow the next line.
+TEST_F(SceneImport, import_lines_ending_in_a_backslash_continue_on_the_next) {
+  write("s.mtl", "newmtl grey\nKd 0.5 \\\n   0.5 0.5\nnewmtl lamp\nKd 0.2 0.2 0.2\nKe 4 \\\r\n4 4\r\n");
+  const std::string obj = write("continued.obj",
+                                "mtllib s.mtl\n"
+                                "# C:\\models\\\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "v 0 0 2\nv 0 1 2\nv 1 1 2\nv 1 0 \\\n 2\n"
+                                "g floor\nusemtl grey\nf 1 2 \\\n  3 \\\t\n  4\n"
+                                "g light\nusemtl lamp\nf 5 6 7 8\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_DOUBLE_EQ(scene.total_area(), 2.0);
+  const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
+  EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));
+  const Surface& floor = scene.surfaces[scene.groups[*scene.find_group("floor")].surfaces[0]];
+  EXPECT_EQ(scene.materials[floor.material].reflectance, Rgb(0.5));
+  EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+  // A continued face has the line it starts on; the lines after it keep their numbers.
+  EXPECT_EQ(scene.faces[scene.groups[*scene.find_group("floor")].faces[0]].source_line, 14);
+  EXPECT_EQ(scene.faces[scene.groups[*scene.find_group("light")].faces[0]].source_line, 19);
+
+  const std::string bad = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 \\\n 2 \\\n 9\nf 1 2 3\n");
+  const InputError e = import_error(bad);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(e.message().find("vertex index out of range"), std::string::npos) << e.what();
+}
+
 // A face written twice counts once (its area, a lamp's flux), with a warning naming both lines; the same
 // vertices the other way round are the back of a two-sided panel and stay. A material defined twice warns too.
 TEST_F(SceneImport, import_repeated_faces_are_skipped_and_repeated_materials_warn) {
