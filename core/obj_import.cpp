@@ -286,6 +286,12 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
         if (!value)
           throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
                                              "' is not a number; write a finite decimal number");
+        // strtod says ERANGE when a number such as 1e999 is beyond a double's range (it gives infinity), not
+        // for "inf" written out.
+        if (std::isinf(*value) && errno == ERANGE)
+          throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
+                                             "' is beyond the range of double precision (about 1.8e308); scale the "
+                                             "scene down");
         if (!std::isfinite(*value))
           throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
                                              "' is not finite (NaN or infinity); replace it with a finite number");

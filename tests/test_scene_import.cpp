@@ -162,8 +162,15 @@ TEST_F(SceneImport, import_nan_coordinate_is_error_with_line) {
 
 TEST_F(SceneImport, import_infinite_coordinate_is_error_with_line) {
   EXPECT_EQ(import_error(write("inf.obj", "v 0 0 0\nv 1 0 0\nv 1 1 -inf\nf 1 2 3\n")).line(), 3);
-  // Too large for a double: strtod gives infinity.
-  EXPECT_EQ(import_error(write("big.obj", "v 0 0 0\nv 1e999 0 0\nv 1 1 0\nf 1 2 3\n")).line(), 2);
+  EXPECT_NE(import_error(write("inf.obj", "v 0 0 0\nv 1 0 0\nv 1 1 -inf\nf 1 2 3\n")).message().find(
+                "vertex coordinate '-inf' is not finite (NaN or infinity)"),
+            std::string::npos);
+  // Too large for a double: strtod gives infinity, but the file has no infinity in it (the message said "not
+  // finite (NaN or infinity)").
+  const InputError big = import_error(write("big.obj", "v 0 0 0\nv 1e999 0 0\nv 1 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(big.line(), 2);
+  EXPECT_EQ(big.message(), "vertex coordinate '1e999' is beyond the range of double precision (about 1.8e308); scale "
+                           "the scene down");
 }
 
 TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
