@@ -100,12 +100,16 @@ std::string clean_text(std::istream& in) {
 }
 
 // tinyobjloader's material reader for cleaned MTL text, found as tinyobjloader finds it: relative to the OBJ's
-// folder. A library that cannot be read is skipped (import_obj warns about it by name).
+// folder. A library that cannot be read is skipped (import_obj warns about it by name). So is one that is not a
+// regular file: a folder opens, and reading it threw std::ios_base::failure ("basic_filebuf::underflow error
+// reading the file: Is a directory"), an internal error.
 class CleanMaterialReader final : public tinyobj::MaterialReader {
  public:
   explicit CleanMaterialReader(fs::path folder) : folder_(std::move(folder)) {}
   bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
                   std::map<std::string, int>* material_map, std::string* warnings, std::string* errors) override {
+    std::error_code error;
+    if (!fs::is_regular_file(folder_ / name, error)) return false;
     std::ifstream in(folder_ / name);
     if (!in) return false;
     std::istringstream text(clean_text(in));
@@ -562,14 +566,23 @@ Scene import_obj(const std::string& obj_path) {
     const fs::path mtl = folder / file;
     if (std::find(libraries_read.begin(), libraries_read.end(), mtl) != libraries_read.end()) continue;
     libraries_read.push_back(mtl);
-    if (fs::is_regular_file(mtl, ec) && std::ifstream(mtl)) {
+    errno = 0;
+    const bool regular = fs::is_regular_file(mtl, ec);
+    const bool readable = regular && std::ifstream(mtl);
+    const int reason = errno;
+    if (readable) {
       read_mtl_text(mtl.string(), mtl_entries, warnings);
-    } else {
-      warnings.push_back(InputError::format(obj_path, line, "material library '" + mtl.string() +
-                                                                "' not found; using the default material (reflectance "
-                                                                "0.5 grey, no emission). Put the MTL file there or fix "
-                                                                "the mtllib line"));
+      continue;
     }
+    // Said as the OBJ's own errors say it: a folder or an unreadable file is not "not found".
+    const std::string problem = regular                ? std::string("cannot be read (") +
+                                                             (reason != 0 ? std::strerror(reason) : "unreadable") + ")"
+                                : fs::exists(mtl, ec) ? "is not a regular file"
+                                                      : "not found";
+    warnings.push_back(InputError::format(obj_path, line, "material library '" + mtl.string() + "' " + problem +
+                                                              "; using the default material (reflectance 0.5 grey, no "
+                                                              "emission). Put the MTL file there or fix the mtllib "
+                                                              "line"));
   }
   for (const auto& [line, name] : text.material_uses)
     if (!mtl_entries.contains(name))

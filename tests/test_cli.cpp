@@ -92,6 +92,21 @@ TEST(Cli, InspectObjWithMissingMtlWarns) {
   EXPECT_NE(j["warnings"].dump().find("missing.mtl"), std::string::npos) << j["warnings"].dump();
 }
 
+// A folder named as the material library is a warning too: it was an internal error (exit 3, "basic_filebuf::
+// underflow error reading the file: Is a directory").
+TEST(Cli, InspectObjWhoseMtlIsAFolderWarns) {
+  fs::create_directories(work_dir() / "folder.mtl");
+  const fs::path obj = write_file("quad_folder_mtl.obj",
+                                  "mtllib folder.mtl\n"
+                                  "o quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  const ProgramRun r = aarad("inspect " + obj.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["warnings"][0], obj.string() + ":1: material library '" + (work_dir() / "folder.mtl").string() +
+                                  "' is not a regular file; using the default material (reflectance 0.5 grey, no "
+                                  "emission). Put the MTL file there or fix the mtllib line");
+}
+
 TEST(Cli, MissingSceneFileExitsOneAndNamesIt) {
   const ProgramRun r = aarad("inspect /nonexistent/room.obj");
   EXPECT_EQ(r.code, 1);

@@ -132,6 +132,26 @@ TEST_F(SceneImport, import_missing_mtl_warns_and_uses_default_material) {
   EXPECT_TRUE(has_warning(scene, "no face emits light"));
 }
 
+// A material library that is there but cannot be read says so: it was "not found" too, and a folder named as one
+// was an internal error ("basic_filebuf::underflow error reading the file: Is a directory", exit code 3).
+TEST_F(SceneImport, import_mtl_that_is_a_folder_or_unreadable_warns_with_what_is_wrong) {
+  fs::create_directories(dir_ / "folder.mtl");
+  write("locked.mtl", kSquareMtl);
+  fs::permissions(dir_ / "locked.mtl", fs::perms::none);
+  const std::string obj = write("a.obj",
+                                "mtllib folder.mtl\nmtllib locked.mtl\n"
+                                "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                "f 1 2 3 4\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(has_warning(scene, obj + ":1: material library '" + (dir_ / "folder.mtl").string() +
+                                     "' is not a regular file; using the default material"));
+  if (::geteuid() != 0) {  // root reads it anyway
+    EXPECT_TRUE(has_warning(scene, obj + ":2: material library '" + (dir_ / "locked.mtl").string() +
+                                       "' cannot be read (Permission denied); using the default material"));
+  }
+  EXPECT_FALSE(has_warning(scene, "not found"));
+}
+
 TEST_F(SceneImport, import_obj_without_materials_uses_default_with_warning) {
   const std::string obj = write("plain.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
   const Scene scene = import_obj(obj);
