@@ -562,10 +562,12 @@ Scene import_obj(const std::string& obj_path) {
   const fs::path folder = fs::path(obj_path).parent_path();
   std::map<std::string, MtlEntry> mtl_entries;
   std::vector<fs::path> libraries_read;
+  std::string library_statements;  // one `mtllib` per library, for tinyobjloader (below)
   for (const auto& [line, file] : text.material_libraries) {
     const fs::path mtl = folder / file;
     if (std::find(libraries_read.begin(), libraries_read.end(), mtl) != libraries_read.end()) continue;
     libraries_read.push_back(mtl);
+    library_statements += "mtllib " + file + "\n";
     errno = 0;
     const bool regular = fs::is_regular_file(mtl, ec);
     const bool readable = regular && std::ifstream(mtl);
@@ -594,7 +596,23 @@ Scene import_obj(const std::string& obj_path) {
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> parsed_materials;
   std::string tiny_warnings, tiny_errors;
-  std::istringstream obj_text(cleaned);
+  // tinyobjloader looks a `usemtl` name up among the libraries read so far, and of an `mtllib` naming several files
+  // reads only the first it can: faces after `usemtl lamp` but before the `mtllib` that defines it, or of a
+  // material in a second library on one line, got the default material without a word, since the check above
+  // finds the name defined. It gets every library, each on a line of its own, before the first statement, and the
+  // file's own `mtllib` lines are left out (the faces are matched to their lines by order, not by tinyobjloader's
+  // line numbers).
+  std::string parsed_text = library_statements;
+  {
+    std::istringstream lines(cleaned);
+    std::string line;
+    while (std::getline(lines, line)) {
+      const std::vector<std::string> t = split_tokens(line);
+      if (t.empty() || t[0] != "mtllib") parsed_text += line;
+      parsed_text += '\n';
+    }
+  }
+  std::istringstream obj_text(parsed_text);
   CleanMaterialReader material_reader(folder.empty() ? fs::path(".") : folder);
   const bool ok = tinyobj::LoadObj(&attrib, &shapes, &parsed_materials, &tiny_warnings, &tiny_errors, &obj_text,
                                    &material_reader, /*triangulate=*/false);

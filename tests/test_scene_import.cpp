@@ -152,6 +152,29 @@ TEST_F(SceneImport, import_mtl_that_is_a_folder_or_unreadable_warns_with_what_is
   EXPECT_FALSE(has_warning(scene, "not found"));
 }
 
+// A material is found whatever the order of `usemtl` and the `mtllib` that defines it, and in every library an
+// `mtllib` line names. Both got the default material (no emission) without a warning: the importer's check found
+// the name defined, but tinyobjloader looked it up only among the libraries read so far, and of a line naming
+// several read only the first.
+TEST_F(SceneImport, import_materials_are_found_in_every_library_whatever_the_order) {
+  write("walls.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+  write("lamps.mtl", "newmtl lamp\nKd 0.2 0.2 0.2\nKe 4 4 4\n");
+  const std::string quads = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 2\nv 0 1 2\nv 1 1 2\nv 1 0 2\n";
+  for (const std::string& obj :
+       {write("later.obj", quads + "g light\nusemtl lamp\nf 5 6 7 8\nmtllib lamps.mtl walls.mtl\n"
+                                   "g floor\nusemtl grey\nf 1 2 3 4\n"),
+        write("second.obj", "mtllib walls.mtl lamps.mtl\n" + quads + "g floor\nusemtl grey\nf 1 2 3 4\n"
+                                                                      "g light\nusemtl lamp\nf 5 6 7 8\n")}) {
+    const Scene scene = import_obj(obj);
+    EXPECT_TRUE(scene.warnings.empty()) << obj << ": " << scene.warnings.front();
+    const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
+    EXPECT_EQ(scene.materials[light.material].name, "lamp") << obj;
+    EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0)) << obj;
+    const Surface& floor = scene.surfaces[scene.groups[*scene.find_group("floor")].surfaces[0]];
+    EXPECT_EQ(scene.materials[floor.material].name, "grey") << obj;
+  }
+}
+
 TEST_F(SceneImport, import_obj_without_materials_uses_default_with_warning) {
   const std::string obj = write("plain.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
   const Scene scene = import_obj(obj);
