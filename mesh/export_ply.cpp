@@ -1,20 +1,11 @@
 // Export of the leaf mesh as binary PLY (Turk's polygon file format): one polygon per leaf element with its
 // hanging vertices (so the file has no crack), vertex colours from the display reconstruction through the
 // caller's VertexColour (a tone map), and per-face float properties radiosity_r, radiosity_g, radiosity_b,
-// level, patch (../shared/design.md, "solve --out"). OpenMesh writes persistent custom face properties with
-// IO::Options::Custom.
-// OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back appends a default-constructed colour, whose
-// components VectorT leaves uninitialized until they are set; GCC 12 reports that as -Wmaybe-uninitialized
-// from a system header. Every colour is assigned before the mesh is written.
-#if defined(__GNUC__) && !defined(__clang__)  // a GCC warning; Clang has no such group
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
-
+// level, patch (../shared/design.md, "solve --out"). The bytes are those OpenMesh 9 writes with
+// IO::Options::Binary | VertexColor | Custom and persistent face properties, except that a face's vertex count
+// takes 4 bytes (`property list int int`, a count type OpenMesh's reader also takes) when a leaf has more than
+// 255 vertices on its loop. OpenMesh writes the count in one byte whatever the face, and a larger face made every
+// face and vertex after it unreadable.
 #include "mesh/export_ply.h"
 
 #include "core/atomic_file.h"
@@ -22,58 +13,71 @@
 #include "mesh/display.h"
 #include "mesh/leaf_mesh.h"
 
-#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
-
-#include <fstream>
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
 
 namespace aarad::mesh {
+namespace {
+
+// Little-endian bytes, whatever the machine's order (the header says binary_little_endian).
+void append_u32(std::string& out, std::uint32_t value) {
+  for (int byte = 0; byte < 4; ++byte) out += static_cast<char>((value >> (8 * byte)) & 0xFFu);
+}
+void append_float(std::string& out, float value) { append_u32(out, std::bit_cast<std::uint32_t>(value)); }
+
+}  // namespace
 
 void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const VertexColour& vertex_colour,
                const std::filesystem::path& path) {
   const Hierarchy::Impl& m = hierarchy.impl();
   const DisplayMesh display = build_display_mesh(hierarchy, node_values);
+  const std::vector<NodeId> leaves = hierarchy.leaves();
 
-  using ExportMesh = OpenMesh::PolyMesh_ArrayKernelT<>;  // float points: what viewers expect
-  ExportMesh out;
-  out.request_vertex_colors();
+  std::vector<std::vector<std::uint32_t>> loops(leaves.size());
+  std::size_t largest = 0;
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
+    for (auto v : m.mesh.fv_range(LeafMesh::FaceHandle(m.face[leaves[i]])))
+      loops[i].push_back(static_cast<std::uint32_t>(v.idx()));
+    if (loops[i].size() < 3) throw Error(path.string() + ": leaf " + std::to_string(leaves[i]) + " has no polygon");
+    largest = std::max(largest, loops[i].size());
+  }
+  const bool wide_counts = largest > std::numeric_limits<std::uint8_t>::max();
+
   const std::size_t vertex_count = m.mesh.n_vertices();
+  std::string bytes = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertex_count) +
+                      "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+                      "property uchar green\nproperty uchar blue\nelement face " +
+                      std::to_string(leaves.size()) + "\nproperty list " + (wide_counts ? "int" : "uchar") +
+                      " int vertex_indices\nproperty float radiosity_r\nproperty float radiosity_g\n"
+                      "property float radiosity_b\nproperty float level\nproperty float patch\nend_header\n";
+  bytes.reserve(bytes.size() + 15 * vertex_count + leaves.size() * (24 + 4 * 5));
   for (std::size_t v = 0; v < vertex_count; ++v) {
-    const Vec3& p = display.positions[v];
-    const auto vh = out.add_vertex(ExportMesh::Point(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)));
-    const std::array<std::uint8_t, 3> c = vertex_colour(display.vertex_values[v]);
-    out.set_color(vh, ExportMesh::Color(c[0], c[1], c[2]));
+    const Vec3& p = display.positions[v];  // float points: what viewers expect
+    append_float(bytes, static_cast<float>(p.x));
+    append_float(bytes, static_cast<float>(p.y));
+    append_float(bytes, static_cast<float>(p.z));
+    for (const std::uint8_t c : vertex_colour(display.vertex_values[v])) bytes += static_cast<char>(c);
   }
-  OpenMesh::FPropHandleT<float> radiosity_r, radiosity_g, radiosity_b, level, patch;
-  out.add_property(radiosity_r, "radiosity_r");
-  out.add_property(radiosity_g, "radiosity_g");
-  out.add_property(radiosity_b, "radiosity_b");
-  out.add_property(level, "level");
-  out.add_property(patch, "patch");
-  for (auto prop : {radiosity_r, radiosity_g, radiosity_b, level, patch}) out.property(prop).set_persistent(true);
-
-  std::vector<ExportMesh::VertexHandle> loop;
-  for (NodeId leaf : hierarchy.leaves()) {
-    loop.clear();
-    for (auto v : m.mesh.fv_range(LeafMesh::FaceHandle(m.face[leaf]))) loop.emplace_back(v.idx());
-    const auto f = out.add_face(loop);
-    if (!f.is_valid()) throw Error(path.string() + ": could not add leaf " + std::to_string(leaf) + " to the PLY mesh");
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
+    const NodeId leaf = leaves[i];
+    if (wide_counts) {
+      append_u32(bytes, static_cast<std::uint32_t>(loops[i].size()));
+    } else {
+      bytes += static_cast<char>(loops[i].size());
+    }
+    for (const std::uint32_t v : loops[i]) append_u32(bytes, v);
     const Rgb& b = node_values[leaf];
-    out.property(radiosity_r, f) = static_cast<float>(b.r);
-    out.property(radiosity_g, f) = static_cast<float>(b.g);
-    out.property(radiosity_b, f) = static_cast<float>(b.b);
-    out.property(level, f) = static_cast<float>(hierarchy.level(leaf));
-    out.property(patch, f) = static_cast<float>(hierarchy.patch(leaf));
+    append_float(bytes, static_cast<float>(b.r));
+    append_float(bytes, static_cast<float>(b.g));
+    append_float(bytes, static_cast<float>(b.b));
+    append_float(bytes, static_cast<float>(hierarchy.level(leaf)));
+    append_float(bytes, static_cast<float>(hierarchy.patch(leaf)));
   }
-
-  write_file_atomically(path, [&](const std::filesystem::path& temporary) {
-    std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
-    if (!stream) throw Error(path.string() + ": cannot open " + temporary.string() + " for writing");
-    const OpenMesh::IO::Options options =
-        OpenMesh::IO::Options::Binary | OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::Custom;
-    const bool written = OpenMesh::IO::write_mesh(out, stream, ".ply", options);
-    stream.close();
-    if (!written || !stream) throw Error(path.string() + ": writing the PLY mesh failed");
-  });
+  write_bytes_atomically(path, bytes);
 }
 
 }  // namespace aarad::mesh

@@ -248,5 +248,46 @@ TEST(HierarchyExport, PlyIsBinaryAndReadsBackWithFaceProperties) {
   EXPECT_EQ(c[0], grey(h.radiosity(leaves[0]))[0]);
 }
 
+// An element left whole while its neighbours are split to the deepest level has more than 255 vertices on its loop
+// (here 4 corners and 2 x 127 hanging vertices at the default max level 8). OpenMesh's PLY writer gives a face's
+// vertex count one byte: the file said 2 for this face, and every face and vertex after it was read as garbage
+// (1 521 faces and 206 216 vertices read back from a 1 537-leaf hierarchy at max level 12). The count is written
+// in 4 bytes when a face needs it, and in 1 byte otherwise, as before.
+TEST(HierarchyExport, PlyKeepsAFaceOfMoreThan255Vertices) {
+  Hierarchy h(test::square_scene(), sizes(1.0, 0.5));  // one patch, 2 x 2 elements of level 1
+  const NodeId whole = h.leaves().front();
+  for (bool split = true; split;) {
+    split = false;
+    for (const NodeId n : h.edge_neighbours(whole)) split = h.split(n).ok || split;
+  }
+  std::vector<Vec3> loop;
+  h.leaf_polygon(whole, loop);
+  ASSERT_EQ(loop.size(), 258u);
+  for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(0.25, 0.5, static_cast<double>(n));
+  const auto dir = std::filesystem::path(AARAD_BINARY_DIR) / "test_hierarchy_export_258";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "mesh.ply";
+  write_ply(h, values_of(h), [](const Rgb&) { return std::array<std::uint8_t, 3>{10, 20, 30}; }, path);
+
+  using ReadMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+  ReadMesh mesh;
+  mesh.request_vertex_colors();
+  OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary | OpenMesh::IO::Options::VertexColor |
+                                  OpenMesh::IO::Options::Custom;
+  ASSERT_TRUE(OpenMesh::IO::read_mesh(mesh, path.string(), options));
+  ASSERT_EQ(mesh.n_faces(), h.leaf_count());
+  EXPECT_EQ(mesh.n_vertices(), h.impl().mesh.n_vertices());
+  OpenMesh::FPropHandleT<float> radiosity_b;
+  ASSERT_TRUE(mesh.get_property_handle(radiosity_b, "radiosity_b"));
+  const auto leaves = h.leaves();
+  for (auto f : mesh.faces()) {
+    const NodeId n = leaves[static_cast<std::size_t>(f.idx())];
+    EXPECT_EQ(mesh.property(radiosity_b, f), static_cast<float>(n));
+    h.leaf_polygon(n, loop);
+    EXPECT_EQ(mesh.valence(f), loop.size());
+  }
+  EXPECT_EQ(mesh.color(ReadMesh::VertexHandle(0))[2], 30);
+}
+
 }  // namespace
 }  // namespace aarad::mesh
