@@ -556,6 +556,17 @@ TEST(Cli, FormfactorsFromABadGroupIsAnError) {
   EXPECT_NE(r.err.find("group 'bent' is not one planar polygon"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("2 planes"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
+  // A two-sided panel: one plane, faces turned both ways (it was "its faces lie in 2 planes").
+  const fs::path panel = write_file("panel.obj", "o panel\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf 1 4 3 2\n"
+                                                 "o other\nv 0 0 2\nv 1 0 2\nv 1 1 2\nf 5 7 6\n");
+  r = aarad("formfactors " + panel.string() + " --from panel");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("aarad: error: group 'panel' is not one planar polygon: its faces lie in one plane but face "
+                       "both ways (a two-sided panel), so it has no one normal; pick a group whose faces all face one "
+                       "way\n"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
   // A group whose only face has zero area (three collinear vertices): the import skips the face with a warning
   // naming the zero area, and the error says the group is not there because its faces were skipped.
   const fs::path flat = write_file("flat.obj", "o flat\nv 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"

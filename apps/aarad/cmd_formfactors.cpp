@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -40,6 +41,18 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
   one_material.build_surfaces();
   const Group& group = one_material.groups[group_index];
   if (group.surfaces.size() != 1) {
+    // Faces of one plane form one surface when they face one way: several surfaces in one plane are faces turned
+    // both ways (a two-sided panel), which have no one normal to shoot along. That is not "2 planes".
+    const Plane& plane = one_material.surfaces[group.surfaces.front()].plane;
+    const double tolerance = kPlaneDistance * scene.diagonal();
+    bool one_plane = true;
+    for (const std::uint32_t f : group.faces)
+      for (const Vec3& v : scene.faces[f].vertices)
+        one_plane = one_plane && std::abs(plane.signed_distance(v)) <= tolerance;
+    if (one_plane) {
+      throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in one plane but face both "
+                  "ways (a two-sided panel), so it has no one normal; pick a group whose faces all face one way");
+    }
     throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in " +
                 std::to_string(group.surfaces.size()) + " planes; pick a planar group");
   }
