@@ -12,7 +12,8 @@
 // Bad input and what happens (every message names the file and, where there is one, the line):
 //   - missing or unreadable OBJ: InputError;
 //   - missing MTL, or a `usemtl` of an undefined material: warning, the default material (rho 0.5 grey, no
-//     emission);
+//     emission). Every library of every `mtllib` line is read, wherever the line stands: a `usemtl` may come
+//     before the `mtllib` that defines its material;
 //   - a NaN or infinite coordinate, a vertex index out of range: InputError with the line;
 //   - a self-intersecting face (its projection to its plane is not simple): InputError with the line;
 //   - Kd outside [0, 1) (the solution would not converge), negative or non-finite Ke: InputError with
