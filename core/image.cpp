@@ -96,6 +96,9 @@ void write_exr(const Image& image, const std::filesystem::path& path) {
   OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
   spec.attribute("compression", "zip");
   spec.attribute("oiio:ColorSpace", "Linear");
+  // OpenImageIO stamps the header's capDate with the time of writing when the spec has no DateTime; an empty one
+  // keeps the file the same bytes for the same image, as the PNGs and the PLY are.
+  spec.attribute("DateTime", "");
   write_with_oiio("openexr", path, spec, OIIO::TypeDesc::FLOAT, image.pixels.data());
 }
 

@@ -22,12 +22,15 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <functional>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
+#include <thread>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -101,6 +104,28 @@ TEST_F(OutputsTest, EveryFileAndNoTemporaryFile) {
   for (const auto& entry : fs::directory_iterator(directory_)) names.insert(entry.path().filename().string());
   EXPECT_EQ(names, (std::set<std::string>{"mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr",
                                           "report.json"}));
+}
+
+// The same solution gives the same files, byte for byte, whenever they are written: a researcher can diff two
+// output folders. OpenImageIO stamps an EXR with the time of writing (the `capDate` header attribute, from the
+// spec's DateTime) unless the spec gives one; write_exr gives an empty one. Written a second later, the EXR
+// differed in its header.
+TEST_F(OutputsTest, FilesWrittenAgainLaterAreTheSameBytes) {
+  const fs::path directory = directory_.parent_path() / (directory_.filename().string() + "-again");
+  fs::remove_all(directory);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));  // capDate counts whole seconds
+  ASSERT_TRUE(write_solution_files(*solver_, directory, {.width = 160, .height = 120}).complete);
+  const auto bytes = [](const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  for (const char* name : {"mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr"})
+    EXPECT_TRUE(bytes(directory_ / name) == bytes(directory / name)) << name;
+  auto input = OIIO::ImageInput::open((directory / "radiosity.exr").string());
+  ASSERT_TRUE(input);
+  EXPECT_EQ(input->spec().get_string_attribute("DateTime"), "");
+  input->close();
+  fs::remove_all(directory);
 }
 
 // keep_writing is asked before each file: `aarad solve` stops there after a second Ctrl-C. Answering no before the
