@@ -363,6 +363,8 @@ Scene load_scene(const std::string& name_or_path) {
   if (name_or_path == "cornell") return make_cornell_box();
   if (name_or_path == "office") return make_office();
   if (name_or_path == "furnace") return make_furnace();
+  if (name_or_path.empty())
+    throw Error("the scene's name is empty; give a built-in scene (cornell, office, furnace) or the path of an OBJ file");
   return import_obj(name_or_path);
 }
 

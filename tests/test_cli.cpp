@@ -241,6 +241,19 @@ TEST(Cli, UnknownCommandIsNamed) {
   EXPECT_NE(r.err.find("solve"), std::string::npos) << r.err;
 }
 
+// An option before any command, and an empty scene name, are named as what they are.
+TEST(Cli, AnOptionBeforeTheCommandAndAnEmptySceneAreNamed) {
+  ProgramRun r = aarad("--bogus");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown option '--bogus' before the command"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("inspect, formfactors, solve"), std::string::npos) << r.err;
+  r = aarad("--version");
+  EXPECT_EQ(r.code, 0);
+  r = aarad("inspect ''");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("aarad: error: the scene's name is empty"), std::string::npos) << r.err;
+}
+
 TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving) {
   const fs::path dir = work_dir();
   // Far more initial elements than memory holds: refused at once, nothing written.

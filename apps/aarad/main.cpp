@@ -32,17 +32,26 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "aarad 0.1.0");
   aarad::app::add_commands(app);
-  // CLI11 would only say that a subcommand is required: name the unknown one and the known ones.
-  if (argc > 1 && argv[1][0] != '-') {
+  // CLI11 would only say that a subcommand is required: name the unknown one, or the option given before any
+  // command, and the known commands.
+  if (argc > 1) {
+    const std::string first = argv[1];
     std::string known;
-    bool found = false;
+    bool found = first == "-h" || first == "--help" || first == "--version";
     for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
-      found = found || command->check_name(argv[1]);
+      found = found || command->check_name(first);
       known += (known.empty() ? "" : ", ") + command->get_name();
     }
     if (!found) {
-      std::fprintf(stderr, "aarad: error: unknown command '%s'; the commands are %s (aarad --help)\n", argv[1],
-                   known.c_str());
+      if (first.starts_with("-")) {
+        std::fprintf(stderr,
+                     "aarad: error: unknown option '%s' before the command; options follow the command, which is "
+                     "one of %s (aarad --help)\n",
+                     first.c_str(), known.c_str());
+      } else {
+        std::fprintf(stderr, "aarad: error: unknown command '%s'; the commands are %s (aarad --help)\n",
+                     first.c_str(), known.c_str());
+      }
       return 2;
     }
   }
