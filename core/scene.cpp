@@ -14,7 +14,6 @@
 #include <array>
 #include <cmath>
 #include <deque>
-#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -325,33 +324,27 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
     });
   }
   std::sort(candidates.begin(), candidates.end());
-  // The faces of the pairs are matched the same way: per dropped axis k, a box for each face of each surface in a
-  // pair whose first surface drops k (its bounds on the two axes kept, its surface's d +- the window), and each
-  // pair of faces whose boxes meet and whose surfaces are a pair adds its share. Each pair used to be swept on its
-  // own, along x over the second surface's faces sorted by left end, a face of the first meeting those within its
-  // span extended to the left by the second's widest face: quadratic where that face was long (80 000 tiles with a
-  // strip along them, 80 000 planks side by side: 8.2 and 22.8 s), and flattening and sorting both surfaces of
-  // every pair was quadratic where a surface of many faces was in many pairs (a floor of 40 000 tiles under 4 000
-  // decals, each its own group: 85 s). The boxes are closed and hold the coordinates overlap() compares strictly,
-  // so every pair of faces with a share is found; each surface is flattened once per projection, and the shares
-  // are summed in the sweep's order (a's faces in order, b's by left end as std::sort put them), which keeps the
-  // areas and the lines of the largest share bit for bit.
-  struct PairKey {
-    std::uint32_t a, b;
-    bool operator==(const PairKey&) const = default;
-  };
-  struct PairKeyHash {
-    std::size_t operator()(const PairKey& p) const { return std::hash<std::uint64_t>()(std::uint64_t{p.a} << 32 | p.b); }
-  };
-  std::unordered_map<PairKey, std::uint32_t, PairKeyHash> pair_index;
+  // The faces of the pairs are matched the same way: per set of surfaces joined by pairs and per dropped axis k, a
+  // box for each face of each surface in a pair whose first surface drops k (its bounds on the two axes kept, its
+  // surface's d +- the window), and each pair of faces whose boxes meet and whose surfaces are a pair adds its
+  // share. Each pair used to be swept on its own, along x over the second surface's faces sorted by left end, a
+  // face of the first meeting those within its span extended to the left by the second's widest face: quadratic
+  // where that face was long (80 000 tiles with a strip along them, 80 000 planks side by side: 8.2 and 22.8 s),
+  // and flattening and sorting both surfaces of every pair was quadratic where a surface of many faces was in many
+  // pairs (a floor of 40 000 tiles under 4 000 decals, each its own group: 85 s). The boxes are closed and hold the
+  // coordinates overlap() compares strictly, so every pair of faces with a share is found; each surface is
+  // flattened once per projection, and the shares are summed in the sweep's order (a's faces in order, b's by left
+  // end as std::sort put them), which keeps the areas and the lines of the largest share bit for bit.
+  std::vector<std::uint32_t> first_pair(surfaces.size() + 1, 0);  // a's pairs are candidates[first_pair[a] ...)
   std::vector<std::array<bool, 3>> in_axis(surfaces.size(), {false, false, false});
   for (std::uint32_t c = 0; c < candidates.size(); ++c) {
     const auto [a, b] = candidates[c];
+    ++first_pair[a + 1];
     if (a == b && surfaces[a].faces.size() < 2) continue;
-    pair_index.emplace(PairKey{a, b}, c);
     const int k = dropped_axis(surfaces[a].plane.normal);
     in_axis[a][k] = in_axis[b][k] = true;
   }
+  for (std::size_t a = 0; a < surfaces.size(); ++a) first_pair[a + 1] += first_pair[a];
   // A surface flattened in the projection of a pair's first surface (which only depends on the axis it drops and
   // the sign of the normal there), once, sorted by left end as the sweep sorted it; rank[p] is where the face
   // surfaces[s].faces[p] went.
@@ -385,38 +378,70 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
     int line_a, line_b;
   };
   std::vector<Share> shares;
-  for (int k = 0; k < 3; ++k) {
-    const int u = (k + 1) % 3, v = (k + 2) % 3;
-    boxes.clear();
-    for (std::uint32_t si = 0; si < surfaces.size(); ++si) {
-      if (!in_axis[si][k]) continue;
-      const Surface& s = surfaces[si];
-      for (const std::uint32_t fi : s.faces) {
-        Vec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-        for (const Vec3& p : faces[fi].vertices) {
-          lo = glm::min(lo, Vec2(p[u], p[v]));
-          hi = glm::max(hi, Vec2(p[u], p[v]));
-        }
-        boxes.push_back(overlap_box(lo, hi, s.plane.d, window, fi));
-      }
+  int k = 0;  // the dropped axis of the pairs being matched
+  const auto match = [&](const OverlapBox& x, const OverlapBox& y) {
+    // overlap() finds nothing unless the bounds overlap strictly on both axes (0 and 2 of the boxes).
+    if (!(x.min_coord(0) < y.max_coord(0) && y.min_coord(0) < x.max_coord(0) && x.min_coord(2) < y.max_coord(2) &&
+          y.min_coord(2) < x.max_coord(2)))
+      return;
+    std::uint32_t fi = x.info(), gi = y.info();
+    std::uint32_t a = faces[fi].surface, b = faces[gi].surface;
+    if (a > b || (a == b && fi > gi)) {  // one surface against itself: its faces in order of index, as the sweep
+      std::swap(fi, gi);
+      std::swap(a, b);
     }
-    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const OverlapBox& x, const OverlapBox& y) {
-      std::uint32_t fi = x.info(), gi = y.info();
-      std::uint32_t a = faces[fi].surface, b = faces[gi].surface;
-      if (a > b || (a == b && fi > gi)) {  // one surface against itself: its faces in order of index, as the sweep
-        std::swap(fi, gi);
-        std::swap(a, b);
+    const auto end = candidates.begin() + first_pair[a + 1];
+    const auto c = std::lower_bound(candidates.begin() + first_pair[a], end, std::pair{a, b});
+    if (c == end || c->second != b || dropped_axis(surfaces[a].plane.normal) != k) return;
+    const Vec3 n = surfaces[a].plane.normal;
+    const Flattened& fa = flat(a, n);
+    const Flattened& fb = flat(b, n);
+    const std::uint32_t first = position_in_surface[fi], second = fb.rank[position_in_surface[gi]];
+    const FlatFace& f = fa.sorted[fa.rank[first]];
+    const FlatFace& g = fb.sorted[second];
+    const double shared = overlap(f, g);
+    if (shared == 0.0) return;  // adds nothing to the sum and is no largest share
+    shares.push_back(Share{static_cast<std::uint32_t>(c - candidates.begin()), first, second, shared, f.line, g.line});
+  };
+  // Per set, since surfaces of about one d that are no pair (noise splits a plane into surfaces out of each other's
+  // plane) would otherwise be matched for nothing: 20 000 planks turned off the axes and written to 7 digits, 1 873
+  // surfaces and 3 pairs besides their own, gave 632 000 pairs of boxes at once, 367 000 of no pair, twice the
+  // sweep's time. A set's flattened surfaces are dropped after it, as no pair reaches beyond it.
+  std::vector<std::uint32_t> component(surfaces.size());
+  for (std::uint32_t si = 0; si < component.size(); ++si) component[si] = si;
+  const auto find = [&](std::uint32_t si) {
+    while (component[si] != si) si = component[si] = component[component[si]];
+    return si;
+  };
+  for (const auto& [a, b] : candidates)
+    if (a != b) component[find(a)] = find(b);
+  std::vector<std::uint32_t> by_component(surfaces.size());
+  for (std::uint32_t si = 0; si < by_component.size(); ++si) by_component[si] = si;
+  for (std::uint32_t si = 0; si < component.size(); ++si) component[si] = find(si);
+  std::sort(by_component.begin(), by_component.end(),
+            [&](std::uint32_t x, std::uint32_t y) { return std::pair{component[x], x} < std::pair{component[y], y}; });
+  for (std::size_t i = 0, j = 0; i < by_component.size(); i = j) {
+    for (j = i; j < by_component.size() && component[by_component[j]] == component[by_component[i]]; ++j) {}
+    for (k = 0; k < 3; ++k) {
+      const int u = (k + 1) % 3, v = (k + 2) % 3;
+      boxes.clear();
+      for (std::size_t m = i; m < j; ++m) {
+        const std::uint32_t si = by_component[m];
+        if (!in_axis[si][k]) continue;
+        const Surface& s = surfaces[si];
+        for (const std::uint32_t fi : s.faces) {
+          Vec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+          for (const Vec3& p : faces[fi].vertices) {
+            lo = glm::min(lo, Vec2(p[u], p[v]));
+            hi = glm::max(hi, Vec2(p[u], p[v]));
+          }
+          boxes.push_back(overlap_box(lo, hi, s.plane.d, window, fi));
+        }
       }
-      const auto c = pair_index.find(PairKey{a, b});
-      if (c == pair_index.end() || dropped_axis(surfaces[a].plane.normal) != k) return;
-      const Vec3 n = surfaces[a].plane.normal;
-      const Flattened& fa = flat(a, n);
-      const Flattened& fb = flat(b, n);
-      const std::uint32_t first = position_in_surface[fi], second = fb.rank[position_in_surface[gi]];
-      const FlatFace& f = fa.sorted[fa.rank[first]];
-      const FlatFace& g = fb.sorted[second];
-      shares.push_back(Share{c->second, first, second, overlap(f, g), f.line, g.line});
-    });
+      if (boxes.size() >= 2) CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), match);
+    }
+    flattened.clear();
+    for (std::size_t m = i; m < j; ++m) flattened_index[by_component[m]].fill(-1);
   }
   std::sort(shares.begin(), shares.end(), [](const Share& x, const Share& y) {
     return std::tie(x.pair, x.first, x.second) < std::tie(y.pair, y.first, y.second);
