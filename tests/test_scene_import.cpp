@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -704,6 +705,46 @@ TEST(SceneSurfaces, OverlapsAreFoundBetweenSurfacesWhoseNormalsLeanToDifferentAx
     EXPECT_EQ(found[0].a, 0u);
     EXPECT_EQ(found[0].b, 1u);
     EXPECT_NEAR(found[0].area, 0.25, 1e-6);  // measured in the projection that drops x or y
+  }
+}
+
+// The shapes on which coplanar_overlaps was quadratic, small: a floor facing +y (the projection keeps z, x, and
+// the old sweep ran along z) of 4 x 4 unit tiles and a 1 x 4 strip beside them along z (one surface, touching
+// only), under three decals each its own group, one of them a runner along the strip; and planks 4 long along z
+// side by side, one of them laid half over its neighbour. Each pair's area and the lines of its largest share by
+// hand: decal a on tile (0, 0), 0.5 x 0.5; decal b across tiles (1, 1) and (2, 1), 0.5 x 0.5 and 0.75 x 0.5; the
+// runner on the strip, 0.5 x 4; the planks, 0.5 x 4.
+TEST(SceneSurfaces, OverlapsOfAFloorWithAStripUnderDecalsAndOfPlanksLaidOverOneAnotherAreTheirAreas) {
+  Scene scene;
+  scene.name = "floor";
+  const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  const auto quad = [](double x0, double x1, double z0, double z1) {  // facing +y
+    return std::vector<Vec3>{{x0, 0, z0}, {x0, 0, z1}, {x1, 0, z1}, {x1, 0, z0}};
+  };
+  const std::uint32_t floor = scene.add_group("floor");
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) scene.add_face(floor, grey, quad(i, i + 1, j, j + 1), 1 + 4 * j + i);  // lines 1-16
+  scene.add_face(floor, grey, quad(-1, 0, 0, 4), 17);                                                     // the strip
+  scene.add_face(scene.add_group("decal a"), grey, quad(0.25, 0.75, 0.25, 0.75), 18);
+  scene.add_face(scene.add_group("decal b"), grey, quad(1.5, 2.75, 1.25, 1.75), 19);
+  scene.add_face(scene.add_group("runner"), grey, quad(-0.75, -0.25, 0, 4), 20);
+  const std::uint32_t planks = scene.add_group("planks");
+  for (int i = 0; i < 3; ++i) scene.add_face(planks, grey, quad(5 + i, 6 + i, 0, 4), 21 + i);
+  scene.add_face(planks, grey, quad(7.5, 8.5, 0, 4), 24);
+  scene.build_surfaces();
+  ASSERT_EQ(scene.surfaces.size(), 5u);
+  const std::vector<Scene::CoplanarOverlap> found = scene.coplanar_overlaps();
+  ASSERT_EQ(found.size(), 4u);
+  const std::array<Scene::CoplanarOverlap, 4> expected{{{0, 1, 0.25, 1, 18},  // decal a on tile (0, 0)
+                                                       {0, 2, 0.625, 7, 19},  // decal b, mostly on tile (2, 1)
+                                                       {0, 3, 2.0, 17, 20},   // the runner on the strip
+                                                       {4, 4, 2.0, 23, 24}}};  // the planks
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(found[i].a, expected[i].a) << i;
+    EXPECT_EQ(found[i].b, expected[i].b) << i;
+    EXPECT_NEAR(found[i].area, expected[i].area, 1e-12) << i;
+    EXPECT_EQ(found[i].line_a, expected[i].line_a) << i;
+    EXPECT_EQ(found[i].line_b, expected[i].line_b) << i;
   }
 }
 
