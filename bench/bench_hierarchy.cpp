@@ -4,8 +4,9 @@
 // Reported: time per split (thread CPU time of split() calls only, balance splits included in the count) and bytes per leaf
 // (heap growth from mallinfo2, and the hierarchy's own container count). Goals (issue 4): time per split
 // within 1.5x across the sizes, under 1 KiB per leaf. Also: building the surfaces and the hierarchy of a scene of
-// many surfaces (BM_BuildTerrain) and of a tessellated ball (BM_BuildSurfacesBall), and the check for faces lying on one another in a scene of many coplanar
-// surfaces (BM_CoplanarOverlapsCubes).
+// many surfaces (BM_BuildTerrain) and of a tessellated ball (BM_BuildSurfacesBall), and the check for faces lying
+// on one another in a scene of many coplanar surfaces (BM_CoplanarOverlapsCubes) and in the shapes it was once
+// quadratic on (BM_CoplanarOverlapsDecals, BM_CoplanarOverlapsPlanks).
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
 
@@ -208,6 +209,71 @@ void BM_CoplanarOverlapsCubes(benchmark::State& state) {
 }
 
 BENCHMARK(BM_CoplanarOverlapsCubes)->Arg(1000)->Arg(4000)->Arg(16000)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// Faces of one plane that the check once compared all with all (Scene::coplanar_overlaps; y up, the projection keeps
+// z and x and its old sweep ran along z). Decals: a floor of n unit tiles, one group, with a strip along z beside
+// them, under n / 10 decals 0.5 x 0.5, each its own group, on every tenth tile: the strip was reach for every tile,
+// and the floor was flattened, sorted and tested in-plane once per decal (40 000 tiles: 85 s on the decals alone).
+// Planks: n planks 100 x 1 along z side by side along x, in one group, or (second argument 1) each its own group: the
+// sweep compared every plank with every other (80 000: 23 s), as did box_intersection_d for the surfaces while their
+// d was its last dimension (40 000 groups: 2.2 s). The time per face should stay about the same.
+void coplanar_overlaps(benchmark::State& state, const aarad::Scene& scene, std::size_t expected) {
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const double t0 = thread_seconds();
+    const auto overlaps = scene.coplanar_overlaps();
+    seconds += thread_seconds() - t0;
+    if (overlaps.size() != expected) state.SkipWithError("unexpected overlaps");
+    benchmark::DoNotOptimize(overlaps.size());
+  }
+  const double faces = static_cast<double>(scene.faces.size());
+  state.counters["faces"] = faces;
+  state.counters["surfaces"] = static_cast<double>(scene.surfaces.size());
+  state.counters["us_per_face"] = 1e6 * seconds / static_cast<double>(state.iterations()) / faces;
+}
+
+std::vector<Vec3> floor_quad(double x0, double x1, double z0, double z1) {  // facing +y
+  return {Vec3(x0, 0, z0), Vec3(x0, 0, z1), Vec3(x1, 0, z1), Vec3(x1, 0, z0)};
+}
+
+void BM_CoplanarOverlapsDecals(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  const int k = static_cast<int>(std::lround(std::sqrt(n)));
+  aarad::Scene scene;
+  scene.name = "decals";
+  const std::uint32_t grey = scene.add_material(aarad::Material{"grey", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  const std::uint32_t floor = scene.add_group("floor");
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) scene.add_face(floor, grey, floor_quad(i, i + 1, j, j + 1));
+  scene.add_face(floor, grey, floor_quad(-1, 0, 0, k));
+  const int decals = k * k / 10;
+  for (int q = 0; q < decals; ++q) {
+    const double x = (10 * q) % k + 0.25, z = (10 * q) / k + 0.25;
+    scene.add_face(scene.add_group("decal" + std::to_string(q)), grey, floor_quad(x, x + 0.5, z, z + 0.5));
+  }
+  scene.build_surfaces();
+  coplanar_overlaps(state, scene, static_cast<std::size_t>(decals));
+}
+
+BENCHMARK(BM_CoplanarOverlapsDecals)->Arg(10000)->Arg(40000)->Arg(160000)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+void BM_CoplanarOverlapsPlanks(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  const bool groups = state.range(1) != 0;
+  aarad::Scene scene;
+  scene.name = "planks";
+  const std::uint32_t grey = scene.add_material(aarad::Material{"grey", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  const std::uint32_t planks = scene.add_group("planks");
+  for (int i = 0; i < n; ++i)
+    scene.add_face(groups ? scene.add_group("plank" + std::to_string(i)) : planks, grey, floor_quad(i, i + 1, 0, 100));
+  scene.build_surfaces();
+  coplanar_overlaps(state, scene, 0);
+}
+
+BENCHMARK(BM_CoplanarOverlapsPlanks)
+    ->ArgsProduct({{10000, 40000, 160000}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
