@@ -296,11 +296,15 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
   // s's plane, which over t's bounding box (centre c, half sizes h) is at most |(n_s - n_t).c + d_s - d_t| +
   // |n_s - n_t|.h + t's largest distance from its own plane. Where that is below the tolerance by 2^-40 of the sizes
   // involved, far more than these sums and the test itself round (a few times 2^-53 of them), every vertex passes
-  // the test; otherwise they are tested one by one, as before.
+  // the test; otherwise they are tested one by one, as before, but the vertices of t farthest along 14 directions
+  // (the axes and the diagonals) first: that distance is about affine in p, so where a vertex is out of the plane
+  // one of those usually is (a floor of 40 000 tiles tilted by 2e-6 radians under 4 000 flat decals, each in the
+  // floor's plane only around itself: 0.45 s in passes over the floor that stopped late, 0.04 s this way).
   struct Extent {
     Vec3 centre{0.0}, half{0.0};
     double deviation = 0.0;  // the largest |signed_distance| of a vertex from the surface's own plane
     double size = 0.0;       // the largest |coordinate| of a vertex
+    std::vector<Vec3> extremes;  // the vertices farthest along the 14 directions, of surfaces of over 4 faces
   };
   std::vector<Extent> extents(surfaces.size());
   for (std::uint32_t si = 0; si < surfaces.size(); ++si) {
@@ -313,6 +317,20 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
         e.deviation = std::max(e.deviation, std::abs(surfaces[si].plane.signed_distance(p)));
       }
     if (surfaces[si].faces.empty()) continue;
+    if (surfaces[si].faces.size() > 4) {
+      std::array<std::pair<double, Vec3>, 14> farthest;
+      farthest.fill({-std::numeric_limits<double>::infinity(), Vec3(0.0)});
+      for (const std::uint32_t fi : surfaces[si].faces)
+        for (const Vec3& p : faces[fi].vertices) {
+          const double x = p.x, y = p.y, z = p.z;
+          const std::array<double, 14> along{x,         -x,        y,         -y,         z,          -z,
+                                             x + y + z, x + y - z, x - y + z, x - y - z,  -x + y + z, -x + y - z,
+                                             -x - y + z, -x - y - z};
+          for (std::size_t i = 0; i < along.size(); ++i)
+            if (along[i] > farthest[i].first) farthest[i] = {along[i], p};
+        }
+      for (const auto& [distance, p] : farthest) e.extremes.push_back(p);
+    }
     e.centre = 0.5 * (lo + hi);
     e.half = glm::max(hi - e.centre, e.centre - lo);
     e.size = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y), std::abs(hi.z)});
@@ -349,11 +367,13 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
       const Surface& t = surfaces[ti];
       if (!(t.plane.d - s.plane.d <= window)) return;
       if (glm::dot(s.plane.normal, t.plane.normal) < 1.0 - kNormalDotTolerance) return;
-      const bool in_plane =
-          surely_in_plane(s, t, extents[ti]) || std::all_of(t.faces.begin(), t.faces.end(), [&](std::uint32_t fi) {
-            return std::all_of(faces[fi].vertices.begin(), faces[fi].vertices.end(),
-                               [&](const Vec3& p) { return std::abs(s.plane.signed_distance(p)) <= tolerance; });
-          });
+      const auto near = [&](const Vec3& p) { return std::abs(s.plane.signed_distance(p)) <= tolerance; };
+      const Extent& e = extents[ti];
+      const bool in_plane = surely_in_plane(s, t, e) ||
+                            (std::all_of(e.extremes.begin(), e.extremes.end(), near) &&
+                             std::all_of(t.faces.begin(), t.faces.end(), [&](std::uint32_t fi) {
+                               return std::all_of(faces[fi].vertices.begin(), faces[fi].vertices.end(), near);
+                             }));
       if (in_plane) candidates.emplace_back(std::min(si, ti), std::max(si, ti));
     });
   }
