@@ -136,8 +136,8 @@ class Scene {
   // Overlaps between faces that lie in one plane and face the same way (a rug laid on a floor, a face copied
   // into a second group): both are lit there and both count the area, where a real scene would have one of
   // them. One entry per pair of surfaces (a <= b; a == b when faces of one surface overlap each other) whose
-  // faces overlap over more than 1e-6 of the smaller surface's area, with that area and the lines of the first
-  // overlapping pair of faces. Faces that only share edges do not overlap; the two sides of a panel face
+  // faces overlap over more than 1e-6 of the smaller surface's area, with that area and the lines of the pair of
+  // faces that overlap most. Faces that only share edges do not overlap; the two sides of a panel face
   // opposite ways and are not compared.
   struct CoplanarOverlap {
     std::uint32_t a = 0, b = 0;
