@@ -357,5 +357,187 @@ TEST(NearField, LeavesSplitAtTheEdgeOfTheNearFieldKeepTheBalance) {
   }
 }
 
+// The near field reaches `reach` times the patch's radius (its farthest corner from its centroid) from the patch's
+// centroid: with reach 4 and the unit floor patch, 4 x sqrt(0.5) = 2.828. Two small elements on the wall x = 1, their
+// centroids 2.80 and 2.86 from the patch's centroid (0.5, 0.5, 0): the first is corrected, the second only scaled
+// with the far field.
+TEST(NearField, ReachIsMeasuredInPatchRadiiFromThePatchsCentroid) {
+  Junction scene;
+  const auto element_at = [&](double distance, std::uint32_t patch) {
+    const double y = 0.5 + std::sqrt(distance * distance - 0.5);  // centroid (1, y, 0.5): 0.5^2 + 0.5^2 off in x, z
+    return add_surface(scene.view, {rectangle(Vec3(1, y - 0.05, 0.45), Vec3(0, 0, 0.1), Vec3(0, 0.1, 0))}, 1, patch)
+        .front();
+  };
+  const std::uint32_t inside = element_at(2.80, 500), outside = element_at(2.86, 501);
+  EXPECT_NEAR(glm::length(centroid(scene.view.polygon(inside)) - scene.centroid), 2.80, 1e-12);
+  EXPECT_NEAR(glm::length(centroid(scene.view.polygon(outside)) - scene.centroid), 2.86, 1e-12);
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> before = scene.shoot(backend);
+  ASSERT_GT(before[inside], 0.0);
+  ASSERT_GT(before[outside], 0.0);
+  NearFieldCorrection correction(4.0);
+  const std::vector<double> after = scene.corrected(before, correction);
+  const auto corrected = correction.last_corrected();
+  EXPECT_NE(std::find(corrected.begin(), corrected.end(), inside), corrected.end());
+  EXPECT_EQ(std::find(corrected.begin(), corrected.end(), outside), corrected.end());
+  EXPECT_EQ(corrected.size(), scene.wall.size() + 1);
+  EXPECT_DOUBLE_EQ(after[outside], before[outside] * correction.far_scale());
+}
+
+// When taking up the near field's change would scale the far receivers by more than a quarter, the near receivers
+// keep the total the back end gave them and the far ones are left alone. The unit wall at the junction gets 0.1901
+// from the patch's centroid and 0.2000 from its own side; a far unit square 3 above the centroid gets about 0.034,
+// which would have to give up about 0.01 of it (a scale near 0.7, below 1 / 1.25).
+TEST(NearField, AFarFieldThatWouldChangeByMoreThanAQuarterIsLeftAlone) {
+  Junction scene;
+  ReceiverView view;
+  scene.wall = add_surface(view, grid(Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 0), scene.n, scene.n), 1, 10);
+  const std::uint32_t far =
+      add_surface(view, {rectangle(Vec3(0, 0, 3), Vec3(0, 1, 0), Vec3(1, 0, 0))}, 2, 200).front();  // facing down
+  scene.view = view;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> before = scene.shoot(backend);
+  NearFieldCorrection correction(4.0);
+  const std::vector<double> after = scene.corrected(before, correction);
+  ASSERT_EQ(correction.last_corrected().size(), scene.wall.size());
+  double near_before = 0.0, near_after = 0.0;
+  for (std::uint32_t r : scene.wall) {
+    near_before += before[r];
+    near_after += after[r];
+  }
+  EXPECT_NEAR(near_before, 0.1901, 1e-4);
+  EXPECT_GT(before[far], 0.03);
+  EXPECT_LT(before[far], 0.04);
+  // What the far square would have been scaled by: (its factor - the near field's gain) / its factor.
+  const double unscaled_gain = near_before / correction.near_scale() - near_before;
+  EXPECT_NEAR(unscaled_gain, 0.2000 - 0.1901, 3e-4);
+  EXPECT_LT((before[far] - unscaled_gain) / before[far], 1.0 / 1.25);
+  EXPECT_EQ(correction.far_scale(), 1.0);
+  EXPECT_EQ(after[far], before[far]);
+  EXPECT_NEAR(near_after, near_before, 1e-15);
+  EXPECT_NEAR(correction.near_scale(), 0.1901 / 0.2000, 2e-3);
+}
+
+// A receiver whose part in front of the patch is a triangle: a diamond on the wall x = 1 with its top corner 0.1
+// above the floor's plane. Only the triangle above the plane (base 0.2 along y at z = 0, apex (1, 0.5, 0.1), area
+// 0.01) sees the patch, and its factor is that triangle's F(A_s -> e).
+TEST(NearField, AReceiverWhosePartInFrontIsATriangleIsShapedByIt) {
+  const Polygon floor = rectangle(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0));  // facing +z
+  ReceiverView view;
+  // Counter-clockwise seen from -x: bottom, y = 0.3, top, y = 0.7.
+  const std::uint32_t diamond =
+      add_surface(view, {{Vec3(1, 0.5, -0.3), Vec3(1, 0.3, -0.1), Vec3(1, 0.5, 0.1), Vec3(1, 0.7, -0.1)}}, 1, 10)[0];
+  ASSERT_LT(view.plane(diamond).normal.x, -0.99);
+  add_surface(view, grid(Vec3(-19.5, -19.5, 4), Vec3(0, 40, 0), Vec3(40, 0, 0), 2, 2), 2, 200);
+  formfactor::AnalyticBackend backend;
+  const std::vector<Vec3> points{Vec3(0.5, 0.5, 1e-9)};
+  const std::vector<double> weights{1.0};
+  std::vector<double> ff(view.size(), 0.0);
+  backend.compute(formfactor::Shooter::from_normal(points[0], Vec3(0, 0, 1)), view, {}, ff);
+  ASSERT_GT(ff[diamond], 0.0);
+  NearFieldCorrection correction(4.0);
+  correction.apply({floor, Vec3(0.5, 0.5, 0.0), Vec3(0, 0, 1), 1.0, points, weights, {}}, view, {}, ff);
+  ASSERT_EQ(correction.near_scale(), 1.0);
+  // The triangle apex a, base b0 -> b1, mapped from the unit square (Duffy): a + u (b0 - a) + u v (b1 - b0),
+  // Jacobian u |(b0 - a) x (b1 - b0)|.
+  const Vec3 apex(1, 0.5, 0.1), b0(1, 0.4, 0.0), b1(1, 0.6, 0.0);
+  std::vector<double> nodes, gauss_weights;
+  gauss_legendre(12, nodes, gauss_weights);
+  double exact = 0.0;
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    for (std::size_t j = 0; j < nodes.size(); ++j) {
+      const double u = nodes[i], v = nodes[j];
+      const Vec3 point = apex + u * (b0 - apex) + u * v * (b1 - b0);
+      exact += gauss_weights[i] * gauss_weights[j] * u * glm::length(glm::cross(b0 - apex, b1 - b0)) *
+               formfactor::polygon_form_factor(point, Vec3(-1, 0, 0), floor);
+    }
+  EXPECT_NEAR(area(std::vector<Vec3>{apex, b0, b1}), 0.01, 1e-15);
+  EXPECT_NEAR(ff[diamond], exact, 0.03 * exact);
+}
+
+// The fraction of a receiver the back end saw is its factor over its unoccluded factor, clamped to 1; where the back
+// end kept no unoccluded factor (0), the receiver counts as seen whole. Either way the analytic back end's factors
+// are corrected as with the exact unoccluded factors.
+TEST(NearField, TheFractionSeenIsClampedToOneAndIsOneWithoutAnUnoccludedFactor) {
+  Junction scene;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> shot = scene.shoot(backend);
+  NearFieldCorrection correction(4.0);
+  const std::vector<double> exact = scene.corrected(shot, correction);
+  for (const double share : {0.5, 0.0}) {
+    std::vector<double> unoccluded(shot.size());
+    for (std::size_t r = 0; r < shot.size(); ++r) unoccluded[r] = share * shot[r];
+    NearFieldShooter shooter = scene.shooter();
+    shooter.unoccluded = unoccluded;
+    std::vector<double> ff = shot;
+    correction.apply(shooter, scene.view, {}, ff);
+    ASSERT_EQ(correction.last_corrected().size(), scene.wall.size());
+    for (std::uint32_t r : scene.wall) EXPECT_NEAR(ff[r], exact[r], 1e-12 * exact[r]) << "share " << share << " " << r;
+  }
+}
+
+// Receivers the back end gave nothing (hidden) are not reshaped, and a shot whose near receivers all see nothing of
+// the patch from their own side (elements of the floor beside the patch, in its plane) is left as the back end
+// gave it.
+TEST(NearField, NothingToShapeLeavesTheShotAsItWas) {
+  Junction scene;
+  formfactor::AnalyticBackend backend;
+  std::vector<double> ff = scene.shoot(backend);
+  const std::uint32_t hidden = scene.wall[3];
+  ff[hidden] = 0.0;
+  NearFieldCorrection correction(4.0);
+  const std::vector<double> after = scene.corrected(ff, correction);
+  const auto corrected = correction.last_corrected();
+  EXPECT_EQ(corrected.size(), scene.wall.size() - 1);
+  EXPECT_EQ(std::find(corrected.begin(), corrected.end(), hidden), corrected.end());
+  EXPECT_EQ(after[hidden], 0.0);
+
+  ReceiverView beside;  // 4 elements of the floor x in [1, 1.25], facing up like the patch
+  add_surface(beside, grid(Vec3(1, 0, 0), Vec3(0.25, 0, 0), Vec3(0, 1, 0), 1, 4), 1, 10);
+  scene.view = beside;
+  const std::vector<double> given(beside.size(), 0.01);  // what a back end might give them from a lifted point
+  const std::vector<double> left = scene.corrected(given, correction);
+  EXPECT_TRUE(correction.last_corrected().empty());
+  EXPECT_EQ(left, given);
+  EXPECT_EQ(correction.near_scale(), 1.0);
+  EXPECT_EQ(correction.far_scale(), 1.0);
+}
+
+// With a table of patches, the receivers of every near patch are candidates, also of the patch with the largest id
+// (the table's last), and apply() to a whole shot looks at receivers added to the view since candidates() (the
+// view's revision stays, its size does not).
+TEST(NearField, CandidatesCoverTheLastPatchAndReceiversAddedSince) {
+  Junction scene;
+  // The wall's pieces are patches 10 .. 73, the table's last; the ceiling's ids lie past the table (never near).
+  std::vector<Vec3> centroids(74, Vec3(0.0));
+  std::vector<double> radii(74, -1.0);
+  for (std::uint32_t r : scene.wall) {
+    const std::uint32_t patch = scene.view.patch(r);
+    centroids[patch] = centroid(scene.view.polygon(r));
+    radii[patch] = glm::length(scene.view.polygon(r)[0] - centroids[patch]);
+  }
+  NearFieldCorrection correction(4.0);
+  correction.set_patches(centroids, radii);
+  const NearFieldShooter shooter = scene.shooter();
+  const std::span<const std::uint8_t> flags = correction.candidates(shooter, scene.view);
+  for (std::uint32_t r : scene.wall) EXPECT_EQ(flags[r], 1) << r;
+  for (std::uint32_t r : scene.ceiling) EXPECT_EQ(flags[r], 0) << r;
+  // A piece of the last patch added after candidates(): a whole shot corrects it too.
+  const std::vector<Vec3> piece(scene.view.polygon(scene.wall.back()).begin(),
+                                scene.view.polygon(scene.wall.back()).end());
+  const std::uint32_t added = scene.view.add(piece, scene.view.plane(scene.wall.back()),
+                                             scene.view.surface(scene.wall.back()), 73);
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> shot = scene.shoot(backend);
+  std::vector<double> listed = shot, scanned = shot;
+  correction.apply(shooter, scene.view, {}, listed);
+  const auto corrected = correction.last_corrected();
+  EXPECT_NE(std::find(corrected.begin(), corrected.end(), added), corrected.end());
+  NearFieldCorrection scanning(4.0);
+  scanning.apply(shooter, scene.view, {}, scanned);
+  EXPECT_EQ(listed, scanned);
+  EXPECT_NE(listed[added], shot[added]);
+}
+
 }  // namespace
 }  // namespace aarad::refine
