@@ -26,6 +26,7 @@
 #include <csignal>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <fstream>
 #include <iterator>
 #include <set>
@@ -341,6 +342,61 @@ TEST(OutputsToneMap, EmittersDoNotSetTheExposure) {
                                     displayed[solver.hierarchy().leaves()[1]].r);
   EXPECT_GT(brightest, 2.0);
   EXPECT_DOUBLE_EQ(solution_tone_map(solver, displayed).exposure, 1.0 / brightest);
+}
+
+// The report's numbers for the furnace (E = 1, rho = 0.5 everywhere: B = E / (1 - rho) = 2 on every surface): the
+// room of 4 x 3 x 5 (area 94), block_a 1 x 0.9 x 1.2 (area 6.36, six faces of its group) and block_b 1 x 0.9 x 0.7
+// (area 4.46) emit 104.82; each group's mean radiosity is its leaves' area-weighted mean, within a few per cent of 2
+// once the unshot flux is below 1 % of the emitted (the hemicube's factors are not exact). The fields beside the contract's are the solver's, and the times are
+// the caller's when given.
+TEST(OutputsReport, FurnaceGroupsFluxesAndTimes) {
+  const Scene scene = make_furnace();
+  SolverOptions options;
+  options.resolution = 50;
+  options.adaptive = false;  // a quick solve: the report is the subject here
+  options.meshing.balance = true;
+  Solver solver(scene, options);
+  solver.run();
+  ASSERT_TRUE(solver.converged());
+  const nlohmann::json report =
+      make_report(solver, {{"test-invariant", mesh::kNoNode, "no node"}, {"test-invariant", 5, "node 5"}},
+                  {.output = 1.5});
+  EXPECT_NEAR(report["emitted_flux"][0].get<double>(), 104.82, 1e-9);
+  std::map<std::string, double> area;
+  for (const auto& group : report["groups"]) {
+    area[group["name"].get<std::string>()] += group["area"].get<double>();
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(group["mean_radiosity"][c].get<double>(), 2.0, 0.05) << group["name"];
+    }
+  }
+  EXPECT_NEAR(area.at("block_a"), 6.36, 1e-12);
+  EXPECT_NEAR(area.at("block_b"), 4.46, 1e-12);
+  double total_area = 0.0;
+  for (const auto& [name, a] : area) total_area += a;
+  EXPECT_NEAR(total_area, 104.82, 1e-9);
+
+  ASSERT_EQ(report["invariants"]["violations"].size(), 2u);
+  EXPECT_TRUE(report["invariants"]["violations"][0]["node"].is_null());
+  EXPECT_EQ(report["invariants"]["violations"][1]["node"], 5);
+
+  EXPECT_EQ(report["seconds"]["output"], 1.5);
+  EXPECT_EQ(report["seconds"]["total"], solver.times().total + 1.5);
+  EXPECT_EQ(make_report(solver, {}, {.total = 0.0, .output = 1.5})["seconds"]["total"], 0.0);
+  EXPECT_EQ(make_report(solver, {}, {.total = 7.0})["seconds"]["total"], 7.0);
+
+  // The solver's deepest leaf and its splits, not the options' limit and the shots.
+  EXPECT_EQ(report["max_level"], solver.max_leaf_level());
+  EXPECT_EQ(report["options"]["max_level"], 8);
+  EXPECT_NE(solver.max_leaf_level(), 8);
+  EXPECT_EQ(report["splits"], solver.splits());
+  EXPECT_NE(solver.splits(), solver.shots());  // no split, many shots
+  EXPECT_EQ(report["ambient"], rgb_json(solver.ambient()));
+  EXPECT_EQ(report["unshot_flux"], rgb_json(solver.unshot_flux()));
+  EXPECT_NE(rgb_json(solver.ambient()), rgb_json(solver.unshot_flux()));
+  EXPECT_EQ(report["options"]["balance"], true);
+  EXPECT_EQ(report["options"]["adaptive"], false);
+  EXPECT_EQ(report["options"]["gradient"], 0.1);
+  EXPECT_EQ(report["options"]["converge"], 0.01);
 }
 
 }  // namespace
