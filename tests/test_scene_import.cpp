@@ -3,6 +3,7 @@
 // the scene contract of shared/design.md; data/scenes/cornell.obj imports to the built-in Cornell box.
 #include "core/builtin_scenes.h"
 #include "core/error.h"
+#include "core/face_check.h"
 #include "core/obj_export.h"
 #include "core/obj_import.h"
 #include "core/polygon.h"
@@ -1107,6 +1108,54 @@ TEST(SceneImportCornell, scene_load_resolves_builtin_names_before_paths) {
     EXPECT_EQ(e.file(), "cornel");
     EXPECT_NE(e.message().find("cornell, office, furnace"), std::string::npos);
   }
+}
+
+// check_face's bounds (kMaxCoordinate 1e50 in magnitude, either sign; kMinFaceSize 1e-50 of bounding-box diagonal),
+// its normal (Newell's, counter-clockwise seen from its tip) and its deviation from planarity.
+TEST(FaceCheck, BoundsNormalAndDeviation) {
+  const auto square = [](double x0, double side) {
+    return std::vector<Vec3>{{x0, 0, 0}, {x0 + side, 0, 0}, {x0 + side, side, 0}, {x0, side, 0}};
+  };
+  EXPECT_EQ(check_face(square(0.0, 1e50)).problem, FaceProblem::kNone);
+  EXPECT_EQ(check_face(square(0.0, 2e50)).problem, FaceProblem::kTooLarge);
+  EXPECT_EQ(check_face(square(-2e50, 1e50)).problem, FaceProblem::kTooLarge);  // -2e50 .. -1e50
+  EXPECT_EQ(check_face(square(0.0, 1e-50)).problem, FaceProblem::kNone);        // diagonal 1.41e-50
+  EXPECT_EQ(check_face(square(0.0, 3e-51)).problem, FaceProblem::kTooSmall);    // diagonal 4.2e-51
+  const FaceCheck unit = check_face(square(0.0, 1.0));
+  EXPECT_EQ(unit.problem, FaceProblem::kNone);
+  EXPECT_EQ(unit.normal, Vec3(0, 0, 1));
+  EXPECT_EQ(unit.size, std::sqrt(2.0));
+  EXPECT_EQ(unit.deviation, 0.0);
+  // A house whose roof apex (0.5, 1.5) lies 0.004 below the rest: Newell's normal is (0, 0.004, 2.5) (unnormalised),
+  // the mean (0.5, 0.7, -0.0008), and the apex lies (0.004 x 0.8 - 2.5 x 0.0032) / 2.5 = -0.00192 from that plane,
+  // farther than any other corner (at most 0.00128, on the other side).
+  const FaceCheck bent =
+      check_face(std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0.5, 1.5, -0.004}, {0, 1, 0}});
+  EXPECT_EQ(bent.problem, FaceProblem::kNone);
+  EXPECT_NEAR(bent.deviation, 0.00192, 1e-8);
+  EXPECT_FALSE(bent.planar());
+}
+
+// What obj_text and mtl_text write for a scene: comment lines ("#" alone for an empty one), one `v` per distinct
+// position (-0 is 0, and written as 0), a `usemtl` where the material changes, no `o` for a group without faces, and
+// material names as one word each: "unnamed" for an empty name, blanks and tabs as underscores, and "_2" for a name
+// an earlier material took.
+TEST(ObjExport, TextOfASmallScene) {
+  Scene scene;
+  const auto nameless = scene.add_material({"", Rgb(0.5), Rgb(0.0)});
+  const auto tabbed = scene.add_material({"a\tb", Rgb(0.25), Rgb(1.0)});
+  scene.add_material({"red paint", Rgb(0.5), Rgb(0.0)});
+  scene.add_material({"red_paint", Rgb(0.5), Rgb(0.0)});
+  const auto floor = scene.add_group("floor");
+  scene.add_group("empty");
+  scene.add_face(floor, nameless, {{-0.0, 0, -0.0}, {1, 0, 0}, {1, 1, 0}});
+  scene.add_face(floor, tabbed, {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  EXPECT_EQ(obj_text(scene, "small.mtl", "first\n\nthird"),
+            "# first\n#\n# third\nmtllib small.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\no floor\nusemtl unnamed\n"
+            "f 1 2 3\nusemtl a_b\nf 1 3 4\n");
+  EXPECT_EQ(mtl_text(scene),
+            "newmtl unnamed\nKd 0.5 0.5 0.5\nKe 0 0 0\nnewmtl a_b\nKd 0.25 0.25 0.25\nKe 1 1 1\n"
+            "newmtl red_paint\nKd 0.5 0.5 0.5\nKe 0 0 0\nnewmtl red_paint_2\nKd 0.5 0.5 0.5\nKe 0 0 0\n");
 }
 
 }  // namespace
