@@ -246,6 +246,19 @@ TEST(Hierarchy, TriangleAndConcaveSurfacesBecomeConformingTriangles) {
   }
 }
 
+// Triangle patches cut m = 3 pieces along each edge: a patch edge walked the other way round by its neighbour
+// (b -> a) must get the same points, in reverse order. The unit right triangle with patch size 0.75 is 2 x 2 patches
+// (legs 0.5, hypotenuse 0.707), and element size 0.25 cuts each into 3 x 3 = 9 elements: 36 leaves, area 0.5.
+TEST(Hierarchy, TrianglePatchesCutInThreeAlongEachEdgeConform) {
+  const Hierarchy tri(test::triangle_scene(), sizes(0.75, 0.25));
+  EXPECT_EQ(tri.patches().size(), 4u);
+  EXPECT_EQ(tri.leaf_count(), 36u);
+  EXPECT_NEAR(total_leaf_area(tri), 0.5, 1e-15);
+  for (NodeId n : tri.leaves()) EXPECT_NEAR(tri.area(n), 0.5 / 36.0, 1e-15) << n;
+  const auto violations = check_invariants(tri);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+}
+
 TEST(Hierarchy, CornellBoxMeshesEverySurfaceConformingly) {
   const Scene scene = make_cornell_box();
   const Hierarchy h(scene, MeshingOptions{});
