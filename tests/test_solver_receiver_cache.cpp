@@ -131,6 +131,33 @@ TEST(SolverReceiverCache, AnotherHierarchyIsBuiltAfresh) {
   expect_same_view(cache, fresh);
 }
 
+// A table (and a cache) handed another hierarchy at the same revision is built afresh: two hierarchies of the Cornell
+// box, each split once at a different leaf, give their new leaves the same node ids.
+TEST(SolverReceiverCache, NeighbourTableOfAnotherHierarchyIsBuiltAfresh) {
+  const Scene scene = make_cornell_box();
+  mesh::Hierarchy first(scene, {}), second(scene, {});
+  ASSERT_TRUE(first.split(first.leaves().front()).ok);
+  ASSERT_TRUE(second.split(second.leaves().back()).ok);
+  ASSERT_EQ(first.revision(), second.revision());
+  ASSERT_EQ(first.node_count(), second.node_count());
+  ReceiverCache cache;
+  NeighbourTable table;
+  EXPECT_TRUE(cache.update(first));
+  table.update(first, cache);
+  EXPECT_TRUE(cache.update(second));
+  EXPECT_FALSE(cache.update(second));
+  EXPECT_EQ(cache.rebuilds(), 2u);
+  table.update(second, cache);
+  std::vector<mesh::NodeId> around;
+  for (std::size_t i = 0; i < cache.size(); ++i) {
+    second.edge_neighbours(cache.leaf(i), around);
+    std::vector<std::uint32_t> expected;
+    for (mesh::NodeId n : around) expected.push_back(cache.receiver(n));
+    const auto got = table.of(i);
+    ASSERT_EQ(std::vector<std::uint32_t>(got.begin(), got.end()), expected) << "receiver " << i;
+  }
+}
+
 // Two surfaces meeting along an edge are meshed apart. Where their grids put points at the same places along the
 // edge, those points must be bit-identical, or a hemicube pixel centre exactly on the edge's projection falls in a
 // gap a rounding wide that neither receiver claims. From the centre patch of a closed cube's floor, cut 3 x 3, the
