@@ -105,6 +105,10 @@ TEST(HierarchyDisplay, HangingVertexTakesTheInterpolationAlongItsHostEdge) {
   EXPECT_DOUBLE_EQ(d.vertex_values[centre].r, 6.0);  // R's centre: mean of its four children
   // L has five loop vertices: a fan of five triangles from its centre; R's children two each.
   EXPECT_EQ(d.triangles.size(), 5u + 4u * 2u);
+  // The fan's centre lies at L's centre, with the mean of L's four corners: (1 + 1.4 + 2.6 + 1) / 4 = 1.5.
+  const std::size_t fan = index_of(d, {0.5, 0.5, 0});
+  ASSERT_LT(fan, n);
+  EXPECT_DOUBLE_EQ(d.vertex_values[fan].r, 1.5);
   expect_crack_free(h, d);
 }
 
