@@ -259,6 +259,17 @@ TEST(Hierarchy, TrianglePatchesCutInThreeAlongEachEdgeConform) {
   EXPECT_TRUE(violations.empty()) << describe(violations);
 }
 
+// A quad face with a straight angle (the triangle (0,0), (2,0), (1,1) with a fourth vertex at (1,0) on its base) is
+// not a strictly convex quadrilateral: it goes to the Delaunay mesher (triangles), not the bilinear grid, whose
+// element at (1,0) would have three corners on one line.
+TEST(Hierarchy, AQuadWithAStraightAngleIsNotMeshedAsAGrid) {
+  const Hierarchy h(test::polygon_scene({{0, 0}, {1, 0}, {2, 0}, {1, 1}}, "flat_corner"), sizes(0.5, 0.25));
+  for (NodeId n : h.leaves()) EXPECT_EQ(h.corner_count(n), 3) << n;
+  EXPECT_NEAR(total_leaf_area(h), 1.0, 1e-12);
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+}
+
 TEST(Hierarchy, CornellBoxMeshesEverySurfaceConformingly) {
   const Scene scene = make_cornell_box();
   const Hierarchy h(scene, MeshingOptions{});
