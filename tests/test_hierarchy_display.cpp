@@ -28,6 +28,8 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <set>
+#include <utility>
 
 namespace aarad::mesh {
 namespace {
@@ -157,6 +159,22 @@ TEST(HierarchyDisplay, SmoothingGroupsPoolTheCornersSharedAcrossSurfaces) {
     }
     EXPECT_EQ(shared_copies, 4);  // (1, 0, 0) and (1, 1, 0), once per surface
     expect_crack_free(h, d);
+  }
+}
+
+// A leaf without hanging vertices is cut along its shorter diagonal, so that its two triangles are as little
+// stretched as they can be and smooth shading follows the nearer corners. In the parallelogram (0,0) (2,0) (3,1)
+// (1,1) the diagonal from (2,0) to (1,1) (length sqrt 2) is the shorter one; (0,0) to (3,1) is sqrt 10.
+TEST(HierarchyDisplay, AQuadLeafIsCutAlongItsShorterDiagonal) {
+  const Hierarchy h(test::polygon_scene({{0, 0}, {2, 0}, {3, 1}, {1, 1}}, "parallelogram"), sizes(4.0, 4.0));
+  ASSERT_EQ(h.leaf_count(), 1u);
+  std::vector<Rgb> values(h.node_count(), Rgb(1.0));
+  const DisplayMesh display = build_display_mesh(h, values);
+  ASSERT_EQ(display.triangles.size(), 2u);
+  for (const auto& triangle : display.triangles) {
+    std::set<std::pair<double, double>> corners;
+    for (const std::uint32_t v : triangle) corners.insert({display.positions[v].x, display.positions[v].y});
+    EXPECT_TRUE(corners.contains({2.0, 0.0}) && corners.contains({1.0, 1.0}));
   }
 }
 
