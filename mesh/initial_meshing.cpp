@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -413,8 +414,14 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
   if (outline) {
     // The grids interpolate between the corners, so a corner that import let off the surface's plane (faces
     // within 1e-6 of the diagonal join a surface) would take whole rows of patches off it: such corners are
-    // moved onto the plane. Corners within 1e-12 of the diagonal keep their bits.
-    const double off = 1e-12 * diagonal;
+    // moved onto the plane. Corners within 1e-12 of the diagonal, or within 16 units in the last place of their
+    // largest coordinate, keep their bits: far from the origin a corner on the plane is only known to be within a
+    // few such units of it, and moved by that rounding, the corners of two surfaces meeting along an edge were no
+    // longer one point (a closed cube of side 0.7 at (1e5, 3e4, 0) had 78 distinct grid points instead of 56, and
+    // its AA hemicube factors summed to 1 - 2.2e-3, taking each overlap for one surface in front of another).
+    double largest = 0.0;
+    for (const Vec3& p : *outline) largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    const double off = std::max(1e-12 * diagonal, 16.0 * std::numeric_limits<double>::epsilon() * largest);
     for (Vec3& p : *outline) {
       const double distance = surface.plane.signed_distance(p);
       if (std::abs(distance) > off) p -= distance * surface.plane.normal;

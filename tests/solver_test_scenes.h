@@ -31,19 +31,25 @@ inline Scene two_unit_squares() {
 }
 
 // The closed unit cube of references.md: inward faces, floor (y = 0) emits `floor_emission`, every face
-// reflects `rho`. Groups: floor, ceiling, wall_x0, wall_x1, wall_z0, wall_z1.
-inline Scene unit_cube(double floor_emission = 1.0, double rho = 0.5, double size = 1.0) {
+// reflects `rho`. Groups: floor, ceiling, wall_x0, wall_x1, wall_z0, wall_z1. `origin` is where its corner (0, 0, 0)
+// goes (a scene far from the origin).
+inline Scene unit_cube(double floor_emission = 1.0, double rho = 0.5, double size = 1.0,
+                       const Vec3& origin = Vec3(0.0)) {
   Scene scene;
   scene.name = "unit-cube";
   const auto light = scene.add_material({"floor", Rgb(rho), Rgb(floor_emission)});
   const auto grey = scene.add_material({"grey", Rgb(rho), Rgb(0.0)});
   const double s = size;
-  add_facing(scene, scene.add_group("floor"), light, {{0, 0, 0}, {s, 0, 0}, {s, 0, s}, {0, 0, s}}, {0, 1, 0});
-  add_facing(scene, scene.add_group("ceiling"), grey, {{0, s, 0}, {s, s, 0}, {s, s, s}, {0, s, s}}, {0, -1, 0});
-  add_facing(scene, scene.add_group("wall_x0"), grey, {{0, 0, 0}, {0, s, 0}, {0, s, s}, {0, 0, s}}, {1, 0, 0});
-  add_facing(scene, scene.add_group("wall_x1"), grey, {{s, 0, 0}, {s, s, 0}, {s, s, s}, {s, 0, s}}, {-1, 0, 0});
-  add_facing(scene, scene.add_group("wall_z0"), grey, {{0, 0, 0}, {s, 0, 0}, {s, s, 0}, {0, s, 0}}, {0, 0, 1});
-  add_facing(scene, scene.add_group("wall_z1"), grey, {{0, 0, s}, {s, 0, s}, {s, s, s}, {0, s, s}}, {0, 0, -1});
+  const auto at = [&](std::vector<Vec3> corners) {
+    for (Vec3& p : corners) p += origin;
+    return corners;
+  };
+  add_facing(scene, scene.add_group("floor"), light, at({{0, 0, 0}, {s, 0, 0}, {s, 0, s}, {0, 0, s}}), {0, 1, 0});
+  add_facing(scene, scene.add_group("ceiling"), grey, at({{0, s, 0}, {s, s, 0}, {s, s, s}, {0, s, s}}), {0, -1, 0});
+  add_facing(scene, scene.add_group("wall_x0"), grey, at({{0, 0, 0}, {0, s, 0}, {0, s, s}, {0, 0, s}}), {1, 0, 0});
+  add_facing(scene, scene.add_group("wall_x1"), grey, at({{s, 0, 0}, {s, s, 0}, {s, s, s}, {s, 0, s}}), {-1, 0, 0});
+  add_facing(scene, scene.add_group("wall_z0"), grey, at({{0, 0, 0}, {s, 0, 0}, {s, s, 0}, {0, s, 0}}), {0, 0, 1});
+  add_facing(scene, scene.add_group("wall_z1"), grey, at({{0, 0, s}, {s, 0, s}, {s, s, s}, {0, s, s}}), {0, 0, -1});
   scene.build_surfaces();
   return scene;
 }

@@ -6,6 +6,7 @@
 #include "mesh/initial_meshing.h"
 #include "mesh/invariants.h"
 #include "mesh/leaf_mesh.h"
+#include "solver_test_scenes.h"
 #include "test_hierarchy_scenes.h"
 
 #include <gtest/gtest.h>
@@ -13,7 +14,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <string>
+#include <tuple>
 
 namespace aarad::mesh {
 namespace {
@@ -180,6 +183,24 @@ TEST(Hierarchy, CornersOfANearlyPlanarQuadAreMovedOntoItsPlane) {
   EXPECT_EQ(h.patches().size(), 25u);
   const auto violations = check_invariants(h);
   EXPECT_TRUE(violations.empty()) << violations.size() << ": " << describe(violations).substr(0, 300);
+}
+
+// Far from the origin the corners of a surface are only known to a few units in the last place of their
+// coordinates, and measured against the surface's plane they seem that far off it. Moved onto the plane by that
+// rounding, the corners of two surfaces meeting along an edge were no longer the same point, and the AA hemicube
+// took the overlap at every junction for one surface in front of another (its layer rule allows 1e-9 of a pixel).
+// A closed cube of side 0.7 at (1e5, 3e4, 0), each face 3 x 3 patches: its faces' grids put 4^3 - 2^3 = 56
+// distinct points on the cube, as at the origin (before, 78 there and 88 at (5e6, 0, 3e6): corners moved by ulps).
+TEST(Hierarchy, CornersOfSurfacesFarFromTheOriginKeepTheirBits) {
+  for (const Vec3 origin : {Vec3(0.0), Vec3(1e5, 3e4, 0.0), Vec3(5e6, 0.0, 3e6)}) {
+    const double side = 0.7;
+    const Hierarchy h(test::unit_cube(1.0, 0.5, side, origin), sizes(0.34 * side, 0.34 * side));
+    ASSERT_EQ(h.leaves().size(), 54u);
+    std::set<std::tuple<double, double, double>> points;
+    for (const NodeId leaf : h.leaves())
+      for (const Vec3& p : h.corners(leaf)) points.emplace(p.x, p.y, p.z);
+    EXPECT_EQ(points.size(), 56u) << "origin " << origin.x << " " << origin.y << " " << origin.z;
+  }
 }
 
 // A T-junction written a little off the edge, as exporters round it: the vertex (1, 1 + gap) of the two upper faces

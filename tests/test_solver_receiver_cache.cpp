@@ -189,5 +189,36 @@ TEST(SolverReceiverCache, MeshedClosedCubeSumsToOneThroughTheClassicalHemicube) 
   }
 }
 
+// The same cube far from the origin (a building in georeferenced metres) through the AA hemicube: every patch's
+// factors add up to 1. Its corners are known to a few ulps of their coordinates; moved onto their planes by that
+// rounding, the surfaces met a rounding apart, and the AA hemicube's layer rule (1e-9 of a pixel) took the overlap
+// for one surface in front of another: at (1e5, 3e4, 0) the worst patch summed to 1 - 2.21e-3, at (1e8, 3e7, 0)
+// to 1 - 2.87e-3.
+TEST(SolverReceiverCache, MeshedClosedCubeFarFromTheOriginSumsToOneThroughTheAaHemicube) {
+  const double side = 0.7;
+  for (const Vec3 origin : {Vec3(1e5, 3e4, 0.0), Vec3(1e8, 3e7, 0.0)}) {
+    const Scene scene = test::unit_cube(1.0, 0.5, side, origin);
+    const mesh::Hierarchy hierarchy(scene, {.patch_size = 0.34 * side, .element_size = 0.34 * side});
+    ReceiverCache cache;
+    cache.update(hierarchy);
+    ASSERT_EQ(cache.size(), 6u * 9u);
+    const auto backend = formfactor::make_backend("aa-hemicube", {.resolution = 100});
+    double worst = 0.0;
+    for (const mesh::NodeId patch : hierarchy.patches()) {
+      // Lifted off its surface well beyond the rounding of its coordinates, as the solver does.
+      const Vec3 normal = hierarchy.plane(patch).normal;
+      const formfactor::Shooter shooter = formfactor::Shooter::from_normal(hierarchy.centroid(patch) + 1e-6 * normal,
+                                                                           normal);
+      std::vector<double> factors(cache.size(), 0.0);
+      backend->compute(shooter, cache.view(), {}, factors);
+      double sum = 0.0;
+      for (std::size_t i = 0; i < factors.size(); ++i)
+        if (cache.view().surface(i) != hierarchy.surface(patch)) sum += factors[i];
+      worst = std::max(worst, std::abs(sum - 1.0));
+    }
+    EXPECT_LT(worst, 1e-12) << "origin " << origin.x << " worst " << worst;
+  }
+}
+
 }  // namespace
 }  // namespace aarad::refine
