@@ -26,6 +26,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace aarad::refine {
 namespace {
@@ -73,6 +74,16 @@ std::vector<SamplePoint> patch_samples(const std::vector<Vec3>& corners, int n) 
   return samples;
 }
 
+// How far a shooting point is lifted off its surface (compute_form_factors): 1e-9 of the scene's diagonal, and
+// at least 16 units in the last place of the scene's largest coordinate. The centroid and the plane are only known
+// to a few of those units, and far from the origin they exceed the first: in a closed cube of side 0.7 at
+// (1e7, 3e6, 0) a patch's factors summed to 1 - 2.3e-7, with the lift a rounding error of the point.
+double shooter_lift(const Scene& scene) {
+  const Vec3 lo = glm::abs(scene.bounds_min()), hi = glm::abs(scene.bounds_max());
+  const double largest = std::max({lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
+  return std::max(1e-9 * scene.diagonal(), 16.0 * std::numeric_limits<double>::epsilon() * largest);
+}
+
 }  // namespace
 
 mesh::MeshingOptions default_meshing(const Scene& scene) {
@@ -95,7 +106,7 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
       options_(options),
       hierarchy_(scene, options.meshing),
       backend_(std::move(backend)),
-      scene_diagonal_(scene.diagonal()),
+      shooter_lift_(shooter_lift(scene)),
       near_field_(options.near_field) {
   if (!backend_) throw Error("solver: no form-factor back end");
   if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
@@ -213,10 +224,11 @@ Rgb Solver::ambient() const { return scan_patches().ambient; }
 void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset) {
   const auto start = Clock::now();
   const Vec3 normal = hierarchy_.plane(shooter).normal;
-  // The shooting point is lifted off its surface by 1e-9 of the scene's size. A centroid computed in floating
-  // point lies a rounding error in front of or behind its own plane; lifted, its own surface lies strictly
-  // behind it, so the polygon containing the point never projects over the whole hemicube.
-  const Vec3 lift = normal * (1e-9 * scene_diagonal_);
+  // The shooting point is lifted off its surface by 1e-9 of the scene's size (far from the origin, by a few
+  // rounding errors of its coordinates: shooter_lift). A centroid computed in floating point lies a rounding error
+  // in front of or behind its own plane; lifted, its own surface lies strictly behind it, so the polygon
+  // containing the point never projects over the whole hemicube.
+  const Vec3 lift = normal * shooter_lift_;
   const Vec3 centroid = hierarchy_.centroid(shooter);
   const std::vector<Vec3> corners = hierarchy_.corners(shooter);
   std::vector<Vec3> points;

@@ -187,7 +187,7 @@ class Solver {
   std::vector<PatchEntry> patch_table_;
   std::unique_ptr<formfactor::FormFactorBackend> backend_;
   ReceiverCache cache_;
-  double scene_diagonal_ = 0.0;
+  double shooter_lift_ = 0.0;  // how far a shooting point is lifted off its surface (compute_form_factors)
 
   std::vector<double> ff_;         // per receiver: form factor of the current shot
   std::vector<double> ff_sample_;  // per receiver: one sample point's factors
