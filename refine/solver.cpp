@@ -539,20 +539,32 @@ void Solver::share_out_corrected_factors(mesh::NodeId first_new) {
   if (reshaped.empty()) return;
   std::sort(reshaped.begin(), reshaped.end());
   reshaped.erase(std::unique(reshaped.begin(), reshaped.end()), reshaped.end());
-  std::vector<double> total(reshaped.size(), 0.0);
+  std::vector<double> total(reshaped.size(), 0.0), area(reshaped.size(), 0.0);
   const auto slot = [&](mesh::NodeId ancestor) {
     const auto it = std::lower_bound(reshaped.begin(), reshaped.end(), ancestor);
     return it != reshaped.end() && *it == ancestor ? static_cast<std::size_t>(it - reshaped.begin()) : reshaped.size();
   };
   for (std::uint32_t receiver : subset_) {
     const std::size_t k = slot(ancestor_of(cache_.leaf(receiver)));
-    if (k < reshaped.size()) total[k] += ff_[receiver];
+    if (k < reshaped.size()) {
+      total[k] += ff_[receiver];
+      area[k] += hierarchy_.area(cache_.leaf(receiver));
+    }
   }
   for (std::uint32_t receiver : subset_) {
     const mesh::NodeId ancestor = ancestor_of(cache_.leaf(receiver));
     const std::size_t k = slot(ancestor);
     if (k < reshaped.size()) {
-      if (total[k] > 0.0) ff_[receiver] *= received_factor_[ancestor] / total[k];
+      if (total[k] > 0.0) {
+        ff_[receiver] *= received_factor_[ancestor] / total[k];
+      } else if (area[k] > 0.0) {
+        // The back end gave none of the pieces anything, though the leaf received: a wall whose plane runs through
+        // the shooting point, standing on the shooting patch, is seen edge on, a rounding's sliver for the leaf and
+        // nothing for its pieces, while the correction gave the leaf what the part of the patch in front of it
+        // sends. The pieces share it by area; left out, it was lost from a closed room (1.3e-3 of the emitted flux
+        // in one shot).
+        ff_[receiver] = received_factor_[ancestor] * hierarchy_.area(cache_.leaf(receiver)) / area[k];
+      }
       mark_reshaped(cache_.leaf(receiver));
     }
   }
