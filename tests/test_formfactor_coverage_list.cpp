@@ -90,6 +90,18 @@ TEST(FormfactorCoverageList, OverlappingRangesThatOverfillThePixelUseTheRecurren
   EXPECT_DOUBLE_EQ(total_visible(apart), 0.6 + 0.4 * 0.4);
 }
 
+TEST(FormfactorCoverageList, SurfacesMeetingARoundingApartStillShareThePixel) {
+  // The floor and the wall of SurfacesMeetingInThePixelShareItSideBySide, with the wall's edge a rounding of the
+  // file's coordinates over the floor's (coverages 0.6 and 0.4 + 1e-6): side by side, the wall keeps the rest of
+  // the pixel, 0.4. Taken for an overlap (the slack was 1e-9), the wall got 0.4 x 0.4 = 0.16.
+  const std::vector<CoverageEntry> corner = {{2.0, 0.6, 0, 1, 0.1f}, {2.05, 0.4 + 1e-6, 1, 2, 0.1f}};
+  std::vector<double> e(2);
+  const double f = resolve_front_to_back(corner, [&](std::uint32_t r, double v) { e[r] = v; });
+  EXPECT_DOUBLE_EQ(e[0], 0.6);
+  EXPECT_DOUBLE_EQ(e[1], 0.4);
+  EXPECT_DOUBLE_EQ(f, 1.0);
+}
+
 TEST(FormfactorCoverageList, CoplanarSurfacesInAnOverfilledLayerShareTheFractionInFront) {
   // Two surfaces of one plane (two materials of a floor meeting inside the pixel: the same key and spread) and an
   // occluder whose depth range overlaps theirs; the coverages add up to 1.5, so the layer takes the recurrence. The
