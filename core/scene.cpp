@@ -60,8 +60,8 @@ void Scene::build_surfaces() {
   surfaces.clear();
   for (Group& g : groups) g.surfaces.clear();
   const double tolerance = kPlaneDistance * diagonal();
-  // A face joins the first surface of its group (in the order they were made) whose material it shares, whose normal is within kNormalDotTolerance of its own, and whose plane holds its vertices within
-  // `tolerance`. The last two bound the surface's offset d: |n_s . v + d_s| <= tolerance with |n_s - n_f| <=
+  // A face joins the first surface of its group (in the order they were made) whose material it shares, whose
+  // normal is within kNormalDotTolerance of its own, and whose plane holds its vertices within `tolerance`. The last two bound the surface's offset d: |n_s . v + d_s| <= tolerance with |n_s - n_f| <=
   // sqrt(2 kNormalDotTolerance) = e gives d_s within tolerance + e |v| of -n_f . v for every vertex v of the face.
   // So only the surfaces whose d lies in that window are tried (kept sorted by d): a mesh of n faces in n planes
   // took n^2 / 2 tests (5 s for 80 000 triangles). Planes tangent to one sphere about the origin all have about the
@@ -266,7 +266,7 @@ double overlap(const FlatFace& f, const FlatFace& g) {
 std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
   std::vector<CoplanarOverlap> found;
   const double tolerance = kPlaneDistance * diagonal();
-  // Coincident planes have nearly equal offsets: sweep the surfaces in order of d. Two unit normals within
+  // Coincident planes have nearly equal offsets: pairs are looked for within a window of d. Two unit normals within
   // kNormalDotTolerance differ by at most sqrt(2 kNormalDotTolerance) in length, which moves d by that times the
   // distance of a shared point from the origin.
   double reach = 0.0;
@@ -280,7 +280,8 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
   std::vector<std::uint32_t> position(surfaces.size());
   for (std::uint32_t i = 0; i < order.size(); ++i) position[order[i]] = i;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> candidates;
-  for (std::uint32_t s = 0; s < surfaces.size(); ++s) candidates.emplace_back(s, s);  // faces of one surface may overlap each other too
+  // Faces of one surface may overlap each other too.
+  for (std::uint32_t s = 0; s < surfaces.size(); ++s) candidates.emplace_back(s, s);
   // Two surfaces are a candidate pair when, taking s as the one earlier in order of d and t the other, t's offset is
   // within the window above s's, the normals agree and t's vertices lie in s's plane. Testing every pair within
   // the window was quadratic where many surfaces share a plane (the tops of 20 000 cubes on a floor: 2 x 10^8
@@ -310,27 +311,25 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
   for (std::uint32_t si = 0; si < surfaces.size(); ++si) {
     Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
     Extent& e = extents[si];
+    const bool with_extremes = surfaces[si].faces.size() > 4;
+    std::array<std::pair<double, Vec3>, 14> farthest;
+    farthest.fill({-std::numeric_limits<double>::infinity(), Vec3(0.0)});
     for (const std::uint32_t fi : surfaces[si].faces)
       for (const Vec3& p : faces[fi].vertices) {
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
         e.deviation = std::max(e.deviation, std::abs(surfaces[si].plane.signed_distance(p)));
+        if (!with_extremes) continue;
+        const double x = p.x, y = p.y, z = p.z;
+        const std::array<double, 14> along{x,         -x,        y,         -y,         z,          -z,
+                                           x + y + z, x + y - z, x - y + z, x - y - z,  -x + y + z, -x + y - z,
+                                           -x - y + z, -x - y - z};
+        for (std::size_t i = 0; i < along.size(); ++i)
+          if (along[i] > farthest[i].first) farthest[i] = {along[i], p};
       }
     if (surfaces[si].faces.empty()) continue;
-    if (surfaces[si].faces.size() > 4) {
-      std::array<std::pair<double, Vec3>, 14> farthest;
-      farthest.fill({-std::numeric_limits<double>::infinity(), Vec3(0.0)});
-      for (const std::uint32_t fi : surfaces[si].faces)
-        for (const Vec3& p : faces[fi].vertices) {
-          const double x = p.x, y = p.y, z = p.z;
-          const std::array<double, 14> along{x,         -x,        y,         -y,         z,          -z,
-                                             x + y + z, x + y - z, x - y + z, x - y - z,  -x + y + z, -x + y - z,
-                                             -x - y + z, -x - y - z};
-          for (std::size_t i = 0; i < along.size(); ++i)
-            if (along[i] > farthest[i].first) farthest[i] = {along[i], p};
-        }
+    if (with_extremes)
       for (const auto& [distance, p] : farthest) e.extremes.push_back(p);
-    }
     e.centre = 0.5 * (lo + hi);
     e.half = glm::max(hi - e.centre, e.centre - lo);
     e.size = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y), std::abs(hi.z)});

@@ -172,8 +172,10 @@ void separate_pinched_fans(SurfaceMeshing& meshing) {
       int& v = corners[static_cast<std::size_t>(k)];
       const Vec3 at = meshing.points[static_cast<std::size_t>(v)];
       for (const CornerIndices& e : meshing.elements[p])
-        for (int j = 0; j < count(e); ++j)
-          if (meshing.points[static_cast<std::size_t>(e[static_cast<std::size_t>(j)])] == at) v = e[static_cast<std::size_t>(j)];
+        for (int j = 0; j < count(e); ++j) {
+          const int corner = e[static_cast<std::size_t>(j)];
+          if (meshing.points[static_cast<std::size_t>(corner)] == at) v = corner;
+        }
     }
   }
 }

@@ -19,8 +19,9 @@
 // the patch's, gets
 //     G_e = v_e F(dA_e -> A_s) A_e / A_s
 // (for a receiver crossing the patch's plane, A_e and the point of dA_e are the area and centroid of its part in
-// front of the patch: its own centroid may lie behind the patch, or just in front at the junction), where v_e, the fraction of e the back end saw, is its factor over its factor with nothing occluding on the same
-// pixels (FormFactorBackend::add_unoccluded; exact when the back end cannot say), clamped to [0, 1], so the back
+// front of the patch: its own centroid may lie behind the patch, or just in front at the junction), where v_e,
+// the fraction of e the back end saw, is its factor over its factor with nothing occluding on the same pixels
+// (FormFactorBackend::add_unoccluded; exact when the back end cannot say), clamped to [0, 1], so the back
 // end's occlusion is kept and its discretisation error is not (the AA hemicube gives an element at a junction,
 // seen edge on through the bottom row of a side face, about half its factor: the cosine kernel, zero at the
 // horizon, varies by a factor of two across that row).
