@@ -77,6 +77,10 @@ class Solver {
   Solver(const Scene& scene, const SolverOptions& options);
   // With a caller-supplied back end (tests, custom back ends).
   Solver(const Scene& scene, const SolverOptions& options, std::unique_ptr<formfactor::FormFactorBackend> backend);
+  // The solver keeps a reference to the scene, so a temporary one (Solver(load_scene("cornell"), options)) would
+  // dangle as soon as the constructor returns: keep the scene in a variable.
+  Solver(Scene&& scene, const SolverOptions& options) = delete;
+  Solver(Scene&& scene, const SolverOptions& options, std::unique_ptr<formfactor::FormFactorBackend> backend) = delete;
   ~Solver();
   Solver(const Solver&) = delete;
   Solver& operator=(const Solver&) = delete;

@@ -14,6 +14,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 namespace aarad::refine {
@@ -500,6 +501,16 @@ TEST(SolverRelaxation, OutsideOneToTwoIsRefused) {
     options.relaxation = relaxation;
     EXPECT_THROW(Solver(scene, options), Error) << relaxation;
   }
+}
+
+// The solver reads the scene through a reference for its whole life: Solver(load_scene("cornell"), options) used to
+// compile and read the destroyed scene (on the Cornell box it stopped after 1 shot instead of 894).
+TEST(SolverLifetime, ATemporarySceneIsRefusedAtCompileTime) {
+  EXPECT_FALSE((std::is_constructible_v<Solver, Scene, const SolverOptions&>));
+  EXPECT_FALSE((std::is_constructible_v<Solver, Scene, const SolverOptions&,
+                                        std::unique_ptr<formfactor::FormFactorBackend>>));
+  EXPECT_TRUE((std::is_constructible_v<Solver, const Scene&, const SolverOptions&>));
+  EXPECT_TRUE((std::is_constructible_v<Solver, Scene&, const SolverOptions&>));
 }
 
 }  // namespace
