@@ -212,6 +212,9 @@ double Hierarchy::Impl::corner_area(NodeId node) const {
 // --- Construction ---------------------------------------------------------------------------------------------
 
 Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(std::make_unique<Impl>()) {
+  // Importers and built-ins validate their scenes; one built in code may not have been, and the initial meshing
+  // crashes (in CGAL's mesher) on a face that validate() refuses, and meshes nothing without build_surfaces().
+  scene.validate();
   Impl& m = *impl_;
   m.scene = scene;
   m.options = resolve_options(scene, options);

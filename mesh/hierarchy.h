@@ -45,6 +45,8 @@ struct SplitResult {
 
 class Hierarchy {
  public:
+  // Meshes a copy of `scene`. Throws what Scene::validate() throws first (a scene built in code whose surfaces are
+  // not built, or with a face the initial meshing cannot take), and aarad::Error for bad options.
   Hierarchy(const Scene& scene, const MeshingOptions& options);
   ~Hierarchy();
   Hierarchy(Hierarchy&&) noexcept;

@@ -50,6 +50,31 @@ TEST(Hierarchy, DefaultsAreRelativeToTheSceneDiagonal) {
   EXPECT_EQ(h.leaf_count(), 144u);
 }
 
+// A scene built in code reaches the hierarchy without passing through an importer: it is validated there. A
+// self-intersecting face crashed CGAL's mesher (a segmentation fault), and a scene whose surfaces were never built
+// made a hierarchy of no leaves, which a solver took as converged after 0 shots.
+TEST(Hierarchy, AnUnvalidatedSceneBuiltInCodeIsRefusedWithValidatesMessage) {
+  const auto message = [](const Scene& scene) -> std::string {
+    try {
+      const Hierarchy h(scene, MeshingOptions{});
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return {};
+  };
+  Scene bow_tie = test::square_scene();
+  bow_tie.add_face(bow_tie.add_group("bow_tie"), 0, {{0, 0, 1}, {1, 1, 1}, {1, 0, 1}, {0, 1, 1}});
+  bow_tie.build_surfaces();
+  EXPECT_NE(message(bow_tie).find("face 1 (group 'bow_tie') intersects itself"), std::string::npos)
+      << message(bow_tie);
+  Scene unbuilt;
+  unbuilt.name = "unbuilt";
+  unbuilt.add_face(unbuilt.add_group("square"), unbuilt.add_material(Material{}),
+                   {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  EXPECT_EQ(message(unbuilt),
+            "unbuilt: physical surfaces are not built; call Scene::build_surfaces() after the last add_face");
+}
+
 TEST(Hierarchy, SizesThatWouldExhaustMemoryOrAreNotFiniteAreRefused) {
   const auto message = [](const Scene& scene, const MeshingOptions& o) -> std::string {
     try {
@@ -159,12 +184,15 @@ TEST(Hierarchy, FacesTilingOneConvexPolygonAreMeshedAsThatPolygon) {
   const Hierarchy overlap(faces_scene({{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 0}, {0, 1}}}), sizes(0.2, 0.1));
   EXPECT_NEAR(total_leaf_area(overlap), 0.75, 1e-12);
   for (NodeId n : overlap.leaves()) EXPECT_EQ(overlap.corner_count(n), 3);
-  // A bow-tie face (import refuses it; the library may be handed one) with two triangles whose edges cancel to
-  // the square [0, 2]^2 although the bow-tie's lower lobe covers part of it twice: not taken for the square.
-  const Hierarchy bow_tie(faces_scene({{{0, 0}, {2, 0}, {0, 1}, {1, 1}}, {{0, 0}, {1, 1}, {0, 1}},
-                                       {{0, 1}, {2, 0}, {2, 2}, {0, 2}}}),
-                          sizes(0.5, 0.25));
-  for (NodeId p : bow_tie.patches()) EXPECT_EQ(bow_tie.corner_count(p), 3);
+  // A bow-tie face (import and Hierarchy refuse it, Scene::validate; mesh_surface may be handed one) with two
+  // triangles whose edges cancel to the square [0, 2]^2 although the bow-tie's lower lobe covers part of it twice:
+  // not taken for the square.
+  const Scene bow_tie = faces_scene({{{0, 0}, {2, 0}, {0, 1}, {1, 1}}, {{0, 0}, {1, 1}, {0, 1}},
+                                     {{0, 1}, {2, 0}, {2, 2}, {0, 2}}});
+  EXPECT_THROW(Hierarchy(bow_tie, sizes(0.5, 0.25)), Error);
+  const SurfaceMeshing meshing = mesh_surface(bow_tie, 0, 0.5, 0.25, 1e9, 1e9, bow_tie.diagonal());
+  ASSERT_FALSE(meshing.patches.empty());
+  for (const CornerIndices& p : meshing.patches) EXPECT_EQ(p[3], -1);
 }
 
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
