@@ -157,7 +157,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
 
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
-  check_shot(shooter, receivers, out);
+  check_shot(shooter, receivers, subset, out);
   prepared_.prepare(shooter, receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   sums_.start(tasks_, geometry_.resolution(), prepared_, receivers.size());

@@ -69,7 +69,7 @@ std::size_t clip_to_front(std::span<const Vec3> local_polygon, std::span<Vec3> o
 
 void AnalyticBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                               std::span<const std::uint32_t> subset, std::span<double> out) {
-  check_shot(shooter, receivers, out);
+  check_shot(shooter, receivers, subset, out);
   culling_.decide(shooter.centre, receivers);
   const std::size_t count = subset.empty() ? receivers.size() : subset.size();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const tbb::blocked_range<std::size_t>& range) {

@@ -28,8 +28,10 @@ struct Shooter {
 
 // What every back end's compute() checks first: a finite centre, a right-handed orthonormal frame (tangent x
 // bitangent = normal, within 1e-9; a Shooter written by hand with a normal other than +z needs its tangents too:
-// use from_normal), and one output value per receiver. Throws aarad::Error naming what is wrong.
-void check_shot(const Shooter& shooter, const ReceiverView& receivers, std::span<const double> out);
+// use from_normal), every subset entry a receiver index, and one output value per receiver. Throws aarad::Error
+// naming what is wrong.
+void check_shot(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
+                std::span<const double> out);
 
 struct BackendOptions {
   int resolution = 100;  // pixels along the full top face of a hemicube

@@ -27,10 +27,17 @@ Shooter Shooter::from_normal(const Vec3& centre, const Vec3& normal) {
   return s;
 }
 
-void check_shot(const Shooter& shooter, const ReceiverView& receivers, std::span<const double> out) {
+void check_shot(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
+                std::span<const double> out) {
   if (out.size() != receivers.size())
     throw Error("form factors: " + std::to_string(out.size()) + " output values for " +
                 std::to_string(receivers.size()) + " receivers; pass one per receiver");
+  for (std::size_t k = 0; k < subset.size(); ++k) {
+    if (subset[k] >= receivers.size())
+      throw Error("form factors: subset entry " + std::to_string(k) + " is receiver " + std::to_string(subset[k]) +
+                  ", but there are " + std::to_string(receivers.size()) + " receivers; pass receiver indices below " +
+                  std::to_string(receivers.size()));
+  }
   const Vec3& c = shooter.centre;
   if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z))
     throw Error("form factors: the shooter's centre is not finite");

@@ -112,6 +112,30 @@ TEST(FormfactorBackends, ShotsWithABadFrameOrOutputSizeAreRefused) {
   EXPECT_THROW(Shooter::from_normal(Vec3(0), Vec3(std::nan(""), 0, 1)), Error);
 }
 
+// A subset naming a receiver the view does not have: every back end crashed (a segmentation fault reading past the
+// view's arrays) instead of saying so.
+TEST(FormfactorBackends, ASubsetEntryBeyondTheReceiversIsRefused) {
+  ReceiverView view;
+  add(view, rectangle({-0.5, -0.5, -1}, {1, 0, 0}, {0, 1, 0}), 0, 0);
+  const Shooter down = Shooter::from_normal(Vec3(0), Vec3(0, 0, -1));
+  const std::vector<std::uint32_t> beyond = {0, 1};
+  for (const std::string& name : backend_names()) {
+    auto backend = make_backend(name, {.resolution = 64});
+    std::vector<double> out(view.size(), 0.0);
+    try {
+      backend->compute(down, view, beyond, out);
+      ADD_FAILURE() << name << ": no exception";
+    } catch (const Error& e) {
+      EXPECT_STREQ(e.what(), "form factors: subset entry 1 is receiver 1, but there are 1 receivers; pass receiver "
+                             "indices below 1")
+          << name;
+    }
+    const std::vector<std::uint32_t> within = {0};
+    EXPECT_NO_THROW(backend->compute(down, view, within, out)) << name;
+    EXPECT_GT(out[0], 0.0) << name;
+  }
+}
+
 // A receiver small against its distance: the factor approaches the point-to-point kernel cos cos A / (pi r^2).
 // The contour integral's R_{i+1} x R_i cancelled between two nearly parallel long vectors: at a size of 1e-8 of
 // the distance the result was off by 35 %, at 1e-9 negative.
