@@ -27,6 +27,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <string>
 
 namespace aarad::refine {
 namespace {
@@ -108,17 +110,23 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
       backend_(std::move(backend)),
       shooter_lift_(shooter_lift(scene)),
       near_field_(options.near_field) {
+  // Library callers set SolverOptions fields, `aarad solve` users the options: the messages name both.
+  const auto refuse = [](const std::string& field, const std::string& option, const std::string& range, double value) {
+    std::ostringstream message;
+    message << "solver: SolverOptions::" << field << " (" << option << ") must be " << range << ", got " << value;
+    throw Error(message.str());
+  };
   if (!backend_) throw Error("solver: no form-factor back end");
-  if (!(options_.converge >= 0.0)) throw Error("solver: --converge must be >= 0");
-  if (options_.max_shots < 0) throw Error("solver: --max-shots must be >= 0");
-  if (!(options_.gradient > 0.0)) throw Error("solver: --gradient must be > 0");
+  if (!(options_.converge >= 0.0)) refuse("converge", "--converge", ">= 0", options_.converge);
+  if (options_.max_shots < 0) refuse("max_shots", "--max-shots", ">= 0", static_cast<double>(options_.max_shots));
+  if (!(options_.gradient > 0.0)) refuse("gradient", "--gradient", "> 0", options_.gradient);
   if (!(options_.relaxation >= 1.0 && options_.relaxation < 2.0)) {
-    throw Error("solver: --relaxation must be in [1, 2)");
+    refuse("relaxation", "--relaxation", "in [1, 2)", options_.relaxation);
   }
   if (options_.shooter_samples < 1 || options_.shooter_samples > 64) {
-    throw Error("solver: shooter samples must be in [1, 64]");
+    refuse("shooter_samples", "--shooter-samples", "in [1, 64]", options_.shooter_samples);
   }
-  if (!(options_.near_field >= 0.0)) throw Error("solver: --near-field must be >= 0");
+  if (!(options_.near_field >= 0.0)) refuse("near_field", "--near-field", ">= 0", options_.near_field);
   initialise();
 }
 

@@ -503,6 +503,26 @@ TEST(SolverRelaxation, OutsideOneToTwoIsRefused) {
   }
 }
 
+// A library caller sets SolverOptions fields: the message names the field (it named only the command-line option,
+// "solver: --gradient must be > 0") and the value given.
+TEST(SolverOptionsCheck, MessagesNameTheFieldTheOptionAndTheValue) {
+  const Scene scene = test::unit_cube();
+  const auto message = [&](const SolverOptions& options) -> std::string {
+    try {
+      const Solver solver(scene, options);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return {};
+  };
+  SolverOptions options = one_patch_per_face(1);
+  options.gradient = 0.0;
+  EXPECT_EQ(message(options), "solver: SolverOptions::gradient (--gradient) must be > 0, got 0");
+  options = one_patch_per_face(1);
+  options.shooter_samples = 65;
+  EXPECT_EQ(message(options), "solver: SolverOptions::shooter_samples (--shooter-samples) must be in [1, 64], got 65");
+}
+
 // The solver reads the scene through a reference for its whole life: Solver(load_scene("cornell"), options) used to
 // compile and read the destroyed scene (on the Cornell box it stopped after 1 shot instead of 894).
 TEST(SolverLifetime, ATemporarySceneIsRefusedAtCompileTime) {
