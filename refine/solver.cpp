@@ -373,6 +373,7 @@ bool Solver::shoot(const PatchScan& scan) {
   absorbed_flux_ = absorbed;
   largest_reflected_ = largest;
   ++shots_;
+  last_shooter_ = shooter;
 
   if (options_.adaptive) substructure(shooter, shot_flux);
   return true;

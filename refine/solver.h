@@ -101,6 +101,9 @@ class Solver {
   // are pulled up, the times are counted, and every split leaf's share is either taken back and re-shot or kept.
   void run(const std::function<bool(const Progress&)>& keep_going = {});
 
+  // The patch the last shot came from (run()'s or shoot_once()'s), kNoNode before the first shot.
+  mesh::NodeId last_shooter() const { return last_shooter_; }
+
   bool converged() const { return converged_; }
   bool interrupted() const { return interrupted_; }
   std::int64_t shots() const { return shots_; }
@@ -250,6 +253,7 @@ class Solver {
   Rgb emitted_flux_{};
   Rgb absorbed_flux_{};
   std::int64_t shots_ = 0;
+  mesh::NodeId last_shooter_ = mesh::kNoNode;
   std::int64_t splits_ = 0;
   bool converged_ = false;
   bool interrupted_ = false;

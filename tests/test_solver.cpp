@@ -503,6 +503,24 @@ TEST(SolverRelaxation, OutsideOneToTwoIsRefused) {
   }
 }
 
+// Stepping shot by shot, a study sees which patch each shot came from. Two facing unit squares, one patch each:
+// the emitter shoots first, then the receiver what it reflected (0.5 x 0.2394565), then the emitter again.
+TEST(SolverShotByShot, LastShooterNamesThePatchEachShotCameFrom) {
+  const Scene scene = test::two_unit_squares();
+  Solver solver(scene, one_patch_per_face(1));
+  const auto patch_of_group = [&](const std::string& group) {
+    for (mesh::NodeId patch : solver.hierarchy().patches()) {
+      if (scene.groups[scene.surfaces[solver.hierarchy().surface(patch)].group].name == group) return patch;
+    }
+    return mesh::kNoNode;
+  };
+  EXPECT_EQ(solver.last_shooter(), mesh::kNoNode);
+  for (const char* group : {"emitter", "receiver", "emitter"}) {
+    ASSERT_TRUE(solver.shoot_once());
+    EXPECT_EQ(solver.last_shooter(), patch_of_group(group)) << "shot " << solver.shots();
+  }
+}
+
 // A library caller sets SolverOptions fields: the message names the field (it named only the command-line option,
 // "solver: --gradient must be > 0") and the value given.
 TEST(SolverOptionsCheck, MessagesNameTheFieldTheOptionAndTheValue) {
