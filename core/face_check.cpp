@@ -54,12 +54,12 @@ FaceCheck check_face(std::span<const Vec3> vertices) {
     const Vec3 c = glm::cross(v[far] - v[0], v[i] - v[0]);
     if (glm::length(c) > glm::length(widest)) widest = c;
   }
-  if (glm::length(widest) <= kZeroArea * size * size) {
+  if (glm::length(widest) <= kZeroAreaFraction * size * size) {
     check.problem = FaceProblem::kCollinear;
     return check;
   }
   const Vec3 newell = vector_area(v);
-  const bool newell_zero = 2.0 * glm::length(newell) <= kZeroArea * size * size;
+  const bool newell_zero = 2.0 * glm::length(newell) <= kZeroAreaFraction * size * size;
   check.normal = newell_zero ? glm::normalize(widest) : glm::normalize(newell);
 
   check.flat.resize(v.size());

@@ -16,7 +16,7 @@ namespace aarad {
 // A face is planar when no vertex lies farther than this fraction of its bounding-box diagonal from its plane;
 // its area is zero when below this fraction of the squared diagonal.
 inline constexpr double kPlanarity = 1e-6;
-inline constexpr double kZeroArea = 1e-12;
+inline constexpr double kZeroAreaFraction = 1e-12;
 // The range of scales the solver computes in: no coordinate beyond kMaxCoordinate in magnitude, no face smaller
 // (bounding-box diagonal) than kMinFaceSize. The solver's products of lengths stay far from the ends of a double's
 // range there: the Cornell box (coordinates up to 560) solves as at scale 1 scaled by 1e-64 to 1e58, and fails
@@ -32,7 +32,7 @@ enum class FaceProblem {
   kTooSmall,                // a bounding-box diagonal below kMinFaceSize
   kCollinear,               // all vertices on one line (no two edges from a vertex span an area)
   kSelfIntersecting,        // two edges cross or touch (decided exactly on the projection to its plane)
-  kZeroArea,                // a simple boundary enclosing no area (Newell area below kZeroArea x size^2)
+  kZeroArea,                // a simple boundary enclosing no area (Newell area below kZeroAreaFraction x size^2)
 };
 
 // What check_face finds. With a problem, the fields after `problem` are valid up to the step that found it.

@@ -502,7 +502,7 @@ std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const
   std::vector<std::vector<Vec3>> out;
   for (const auto& t : triangles) {
     std::vector<Vec3> tri{v[t[0]], v[t[1]], v[t[2]]};
-    if (2.0 * area(tri) > kZeroArea * check.size * check.size) out.push_back(std::move(tri));
+    if (2.0 * area(tri) > kZeroAreaFraction * check.size * check.size) out.push_back(std::move(tri));
   }
   warnings.push_back(InputError::format(
       path, line, "face is not planar (a vertex lies " + number_text(check.deviation) + " from its plane, more than " +

@@ -108,8 +108,8 @@ class Scene {
   // vertices, coordinates of at most 1e50 and a size of at least 1e-50, not all on one line, a boundary that
   // neither crosses nor touches itself), an emitted flux (emission x area) below kMaxEmittedFlux, every face in a
   // built surface. Throws aarad::InputError naming the scene otherwise, and for a face its index in `faces` and its
-  // group. Importers and built-ins call it before handing a scene out. A face that is not planar is accepted (the
-  // importer splits it; validate cannot).
+  // group. Importers and built-ins call it before handing a scene out, and mesh::Hierarchy before meshing one. A
+  // face that is not planar is accepted (the importer splits it; validate cannot).
   void validate() const;
 
   // Axis-aligned bounds and their diagonal, the scene's size for relative tolerances and defaults.
