@@ -231,6 +231,26 @@ TEST(HemicubeAccuracy, ClassicalHemicubeWithinItsQuantisation) {
   }
 }
 
+// The classical hemicube's fill rule on the top face of N = 8, where pixel x spans u in [x / 4 - 1, (x + 1) / 4 - 1]
+// and is sampled at its centre. The square u, v in [-1/8, 1/8] at height 1 has pixel centres on its lower-left corner
+// (3.5, 3.5) and on its right and upper edges only: the half-open spans give it the one pixel (3, 3), whose exact
+// delta form factor is Howell's B-3 for a quarter by a quarter with a corner above the point. The corner lies on
+// the border of the top face's two column tasks (columns 0-3, 4-7), so the left task must not drop a receiver whose
+// box starts at its last centre. The square u, v in [-0.2, 0.2] covers the centres of the four pixels around the
+// axis, the square [-1/4, 1/4]^2: four times B-3; no pixel whose centre lies outside is taken.
+TEST(HemicubeAccuracy, ClassicalHemicubeTakesThePixelsWhoseCentresItCoversHalfOpen) {
+  const Shooter up = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
+  HemicubeBackend classical(8);
+  const double eighth = 0.125;
+  EXPECT_NEAR(single(classical, up, rectangle({-eighth, -eighth, 1}, {0, 2 * eighth, 0}, {2 * eighth, 0, 0})),
+              howell_b3(0.25, 0.25, 1.0), 1e-15);
+  // Twice as wide, u in [-1/8, 3/8]: the centre 5.5 on its right edge, inside the right task, is not taken either.
+  EXPECT_NEAR(single(classical, up, rectangle({-eighth, -eighth, 1}, {0, 2 * eighth, 0}, {4 * eighth, 0, 0})),
+              2.0 * howell_b3(0.25, 0.25, 1.0), 1e-15);
+  EXPECT_NEAR(single(classical, up, rectangle({-0.2, -0.2, 1}, {0, 0.4, 0}, {0.4, 0, 0})),
+              4.0 * howell_b3(0.25, 0.25, 1.0), 1e-15);
+}
+
 TEST(HemicubeAccuracy, PaperFigure1SmallReceiverBetweenPixelCentres) {
   // A square of 0.4 x 0.4 pixels at height 1, inside top-face pixel (61, 57) of N = 100 but away from its
   // centre: the classical hemicube misses it, the AA hemicube gets the analytic value.
