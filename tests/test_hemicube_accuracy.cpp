@@ -251,6 +251,33 @@ TEST(HemicubeAccuracy, ClassicalHemicubeTakesThePixelsWhoseCentresItCoversHalfOp
               4.0 * howell_b3(0.25, 0.25, 1.0), 1e-15);
 }
 
+// With keep_unoccluded, the classical hemicube adds up for each receiver asked for the delta form factors of every
+// pixel it covers, in front or not: the factor it gets with nothing in front. A receiver on the top face's right
+// column half (u in [0.1, 0.6]) partly hidden by a plate at height 1/2 gets less than alone, and its unoccluded
+// factor is what it gets alone; the plate, not asked for, gets none. (Sampled from the columns of the top face's
+// right task, the delta form factors must be read at the face's columns, not at the task's.)
+TEST(HemicubeAccuracy, ClassicalHemicubeKeepsTheUnoccludedFactorsOfTheReceiversAskedFor) {
+  const Shooter up = Shooter::from_normal(Vec3(0), Vec3(0, 0, 1));
+  const Polygon receiver = rectangle({0.1, -0.3, 1}, {0, 0.5, 0}, {0.5, 0, 0});
+  HemicubeBackend lone(100);
+  const double alone = single(lone, up, receiver);
+  ASSERT_GT(alone, 0.0);
+  ReceiverView view;
+  add(view, receiver, 0, 0);
+  add(view, rectangle({0.2, -0.2, 0.5}, {0, 0.2, 0}, {0.2, 0, 0}), 1, 1);
+  HemicubeBackend classical(100);
+  const std::vector<std::uint8_t> wanted{1, 0};
+  ASSERT_TRUE(classical.keep_unoccluded(wanted));
+  const std::vector<double> f = run(classical, up, view);
+  EXPECT_LT(f[0], alone);  // the plate hides u in [0.4, 0.6], v in [-0.3, 0] of it
+  EXPECT_GT(f[0], 0.5 * alone);
+  EXPECT_GT(f[1], 0.0);
+  std::vector<double> unoccluded(view.size(), 0.0);
+  ASSERT_TRUE(classical.add_unoccluded(unoccluded));
+  EXPECT_NEAR(unoccluded[0], alone, 1e-15);
+  EXPECT_EQ(unoccluded[1], 0.0);
+}
+
 TEST(HemicubeAccuracy, PaperFigure1SmallReceiverBetweenPixelCentres) {
   // A square of 0.4 x 0.4 pixels at height 1, inside top-face pixel (61, 57) of N = 100 but away from its
   // centre: the classical hemicube misses it, the AA hemicube gets the analytic value.
