@@ -76,6 +76,30 @@ TEST(FormfactorAnalytic, ClipsToTheFrontAndCullsBackFaces) {
   EXPECT_EQ(analytic(kUp, rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0})), 0.0);
 }
 
+// A corner exactly on the shooter's plane that follows a corner behind it is kept: the wall x = 0.7 with its corner
+// (y, z) = (0, 0) on the plane and (0.9, -1) below it has in front exactly B-2's rectangle y in [0, 0.9], z in
+// [0, 1.3]. Taking the on-plane corner for one behind dropped it (and no crossing replaced it): a triangle was left.
+TEST(FormfactorAnalytic, ACornerOnTheShootersPlaneAfterOneBehindItIsKept) {
+  const Polygon wall{{0.7, 0, 0}, {0.7, 0, 1.3}, {0.7, 0.9, 1.3}, {0.7, 0.9, -1}};
+  EXPECT_NEAR(analytic(kUp, wall), howell_b2(1.3, 0.9, 0.7), 1e-12);
+  // The same corners one place on: the on-plane corner now follows one in front.
+  const Polygon turned{wall[3], wall[0], wall[1], wall[2]};
+  EXPECT_NEAR(analytic(kUp, turned), howell_b2(1.3, 0.9, 0.7), 1e-12);
+}
+
+// A corner a rounding (1e-20) behind the shooter's plane between two well in front: both crossings land on the corner
+// itself, bit for bit, and the clipped polygon has a zero-length edge, which adds nothing (its direction is undefined:
+// 0 / 0 gave NaN). The factor is the triangle's with that corner on the plane, to the precision of the formula.
+TEST(FormfactorAnalytic, ACornerARoundingBehindThePlaneGivesTheFactorOfTheCornerOnIt) {
+  const Polygon dipped{{0.7, 0, 1.3}, {0.7, 0.9, 1.3}, {0.7, 0.45, -1e-20}};
+  const Polygon touching{{0.7, 0, 1.3}, {0.7, 0.9, 1.3}, {0.7, 0.45, 0}};
+  const double reference = polygon_form_factor(Vec3(0), Vec3(0, 0, 1), touching);
+  ASSERT_GT(reference, 0.0);
+  const double f = analytic(kUp, dipped);
+  ASSERT_TRUE(std::isfinite(f));
+  EXPECT_NEAR(f, reference, 1e-14 * reference);
+}
+
 TEST(FormfactorAnalytic, SubsetLeavesOthersUntouched) {
   ReceiverView view;
   add(view, rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);
