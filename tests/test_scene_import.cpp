@@ -1136,6 +1136,26 @@ TEST(FaceCheck, BoundsNormalAndDeviation) {
   EXPECT_FALSE(bent.planar());
 }
 
+// The bounds hold on every axis (a coordinate beyond 1e50 in z alone is too large), and the size is the bounding
+// box's diagonal wherever the face lies: a unit square moved far from the origin keeps the size sqrt 2, and a square
+// of side 1e-3 a million units out is a small face, not a line (its twice-area 1e-6 against 1e-12 of its squared
+// size 2e-6, not of the squared distance 1e12).
+TEST(FaceCheck, BoundsHoldOnEveryAxisAndTheSizeIsTheBoxDiagonalWhereverTheFaceLies) {
+  const auto square = [](const Vec3& corner, double side) {
+    return std::vector<Vec3>{corner, corner + Vec3(side, 0, 0), corner + Vec3(side, side, 0), corner + Vec3(0, side, 0)};
+  };
+  EXPECT_EQ(check_face(square(Vec3(0, 0, 2e50), 1.0)).problem, FaceProblem::kTooLarge);
+  EXPECT_EQ(check_face(square(Vec3(0, 0, -2e50), 1.0)).problem, FaceProblem::kTooLarge);
+  EXPECT_EQ(check_face(square(Vec3(0, 0, 1e50), 1.0)).problem, FaceProblem::kNone);
+  const FaceCheck moved = check_face(square(Vec3(1e8, -1e8, 5.0), 1.0));
+  EXPECT_EQ(moved.problem, FaceProblem::kNone);
+  EXPECT_EQ(moved.size, std::sqrt(2.0));  // 1e8 + 1 - 1e8 is exactly 1
+  const FaceCheck small = check_face(square(Vec3(1e6, 0, 0), 1e-3));
+  EXPECT_EQ(small.problem, FaceProblem::kNone);
+  EXPECT_NEAR(small.size, 1e-3 * std::sqrt(2.0), 1e-9);  // 1e6 + 1e-3 is 1e-3 within an ulp of 1e6, 1.2e-10
+  EXPECT_EQ(small.normal, Vec3(0, 0, 1));
+}
+
 // What obj_text and mtl_text write for a scene: comment lines ("#" alone for an empty one), one `v` per distinct
 // position (-0 is 0, and written as 0), a `usemtl` where the material changes, no `o` for a group without faces, and
 // material names as one word each: "unnamed" for an empty name, blanks and tabs as underscores, and "_2" for a name
