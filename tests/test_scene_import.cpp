@@ -1156,6 +1156,15 @@ TEST(FaceCheck, BoundsHoldOnEveryAxisAndTheSizeIsTheBoxDiagonalWhereverTheFaceLi
   EXPECT_EQ(small.normal, Vec3(0, 0, 1));
 }
 
+// A face that lists its first vertex again at its end (f 1 2 3 4 1) is the face without the repeat, not one with a
+// zero-length closing edge (which is_simple would call self-intersecting).
+TEST(FaceCheck, AFirstVertexRepeatedAtTheEndIsDropped) {
+  const FaceCheck closed = check_face(std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}});
+  EXPECT_EQ(closed.problem, FaceProblem::kNone);
+  EXPECT_EQ(closed.vertices, (std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
+  EXPECT_EQ(closed.normal, Vec3(0, 0, 1));
+}
+
 // What obj_text and mtl_text write for a scene: comment lines ("#" alone for an empty one), one `v` per distinct
 // position (-0 is 0, and written as 0), a `usemtl` where the material changes, no `o` for a group without faces, and
 // material names as one word each: "unnamed" for an empty name, blanks and tabs as underscores, and "_2" for a name
