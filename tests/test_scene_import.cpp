@@ -1165,6 +1165,20 @@ TEST(FaceCheck, AFirstVertexRepeatedAtTheEndIsDropped) {
   EXPECT_EQ(closed.normal, Vec3(0, 0, 1));
 }
 
+// A chevron (0, 0), (1, 1 - d), (2, 0), (1, 1) is simple and spans a triangle of area 1, so it is neither a line nor
+// self-intersecting, but it encloses only the sliver of area d between its two upper edges. With d = 1e-13, far below
+// 1e-12 of its squared size 5, it is of zero area; with d = 1e-3 it is a face.
+TEST(FaceCheck, AThinChevronEnclosingNoAreaIsOfZeroArea) {
+  const auto chevron = [](double d) {
+    return std::vector<Vec3>{{0, 0, 0}, {1, 1 - d, 0}, {2, 0, 0}, {1, 1, 0}};
+  };
+  EXPECT_EQ(check_face(chevron(1e-13)).problem, FaceProblem::kZeroArea);
+  const FaceCheck face = check_face(chevron(1e-3));
+  EXPECT_EQ(face.problem, FaceProblem::kNone);
+  EXPECT_NEAR(area(face.vertices), 1e-3, 1e-15);
+  EXPECT_EQ(face.normal, Vec3(0, 0, 1));
+}
+
 // What obj_text and mtl_text write for a scene: comment lines ("#" alone for an empty one), one `v` per distinct
 // position (-0 is 0, and written as 0), a `usemtl` where the material changes, no `o` for a group without faces, and
 // material names as one word each: "unnamed" for an empty name, blanks and tabs as underscores, and "_2" for a name
