@@ -576,5 +576,36 @@ TEST(NearField, CandidatesCoverTheLastPatchAndReceiversAddedSince) {
   EXPECT_NE(listed[added], shot[added]);
 }
 
+// The patch's radius is its farthest corner's distance from its centroid, whatever the order of its corners: the
+// triangle (1, 0), (0, 1), (0, 0) has its centroid at (1/3, 1/3), its first two corners sqrt 5 / 3 from it and its
+// last sqrt 2 / 3, so with reach 4 the near field reaches 4 sqrt 5 / 3 = 2.981. A small element facing the patch
+// from the wall x = 2.8, its centroid 2.485 from the patch's, is corrected; one on the wall x = 3.4, 3.081 away, is
+// not.
+TEST(NearField, ThePatchsRadiusIsItsFarthestCornersDistanceInAnyOrder) {
+  const Polygon triangle{{1, 0, 0}, {0, 1, 0}, {0, 0, 0}};
+  const Vec3 centroid(1.0 / 3.0, 1.0 / 3.0, 0.0);
+  ReceiverView view;
+  const auto element_at = [&](double x) {  // 0.2 x 0.2, centred at (x, 1/3, 0.3), facing -x
+    return formfactor::testing::add(view, rectangle(Vec3(x, 1.0 / 3.0 - 0.1, 0.2), Vec3(0, 0, 0.2), Vec3(0, 0.2, 0)),
+                                    1, 10);
+  };
+  const std::uint32_t near = element_at(2.8), far = element_at(3.4);
+  const double reach = 4.0 * std::sqrt(5.0) / 3.0;
+  EXPECT_NEAR(glm::length(aarad::centroid(view.polygon(near)) - centroid), std::hypot(2.8 - 1.0 / 3.0, 0.3), 1e-12);
+  EXPECT_LT(glm::length(aarad::centroid(view.polygon(near)) - centroid), reach);
+  EXPECT_GT(glm::length(aarad::centroid(view.polygon(far)) - centroid), reach);
+  const std::vector<Vec3> points{centroid + Vec3(0, 0, 1e-9)};
+  const std::vector<double> weights{1.0};
+  const NearFieldShooter shooter{triangle, centroid, Vec3(0, 0, 1), 0.5, points, weights, {}};
+  std::vector<double> ff(view.size(), 0.0);
+  formfactor::AnalyticBackend().compute(formfactor::Shooter::from_normal(points[0], Vec3(0, 0, 1)), view, {}, ff);
+  ASSERT_GT(ff[near], 0.0);
+  ASSERT_GT(ff[far], 0.0);
+  NearFieldCorrection correction(4.0);
+  correction.apply(shooter, view, {}, ff);
+  EXPECT_EQ(std::vector<std::uint32_t>(correction.last_corrected().begin(), correction.last_corrected().end()),
+            std::vector<std::uint32_t>{near});
+}
+
 }  // namespace
 }  // namespace aarad::refine
