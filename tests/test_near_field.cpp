@@ -607,5 +607,25 @@ TEST(NearField, ThePatchsRadiusIsItsFarthestCornersDistanceInAnyOrder) {
             std::vector<std::uint32_t>{near});
 }
 
+// The back end's factors from several points are weighted means, and so are the unoccluded factors the correction
+// computes from the points when the back end gives none: the patch's centroid given twice with weights 1/2 is the
+// centroid, and corrects the shot as the centroid alone does, bit for bit.
+TEST(NearField, UnoccludedFactorsFromThePointsAreWeightedLikeTheFactors) {
+  Junction scene;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> shot = scene.shoot(backend);
+  NearFieldCorrection once(4.0), twice(4.0);
+  const std::vector<double> from_one = scene.corrected(shot, once);
+  const std::vector<Vec3> points{scene.points[0], scene.points[0]};
+  const std::vector<double> halves{0.5, 0.5};
+  NearFieldShooter doubled = scene.shooter();
+  doubled.points = points;
+  doubled.weights = halves;
+  std::vector<double> from_two = shot;
+  twice.apply(doubled, scene.view, {}, from_two);
+  EXPECT_EQ(from_two, from_one);
+  EXPECT_NE(from_one, shot);
+}
+
 }  // namespace
 }  // namespace aarad::refine
