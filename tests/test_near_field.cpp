@@ -627,5 +627,22 @@ TEST(NearField, UnoccludedFactorsFromThePointsAreWeightedLikeTheFactors) {
   EXPECT_NE(from_one, shot);
 }
 
+// A re-shot subset rewrites the factors of its receivers only: its near receivers get what the whole shot gave them,
+// its far ones the back end's factor times the whole shot's far scale, and every receiver outside the subset keeps
+// its factor (already corrected and scaled by the whole shot) as it was.
+TEST(NearField, ASubsetRewritesItsOwnReceiversOnly) {
+  Junction scene;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> shot = scene.shoot(backend);
+  NearFieldCorrection correction(4.0);
+  const std::vector<double> whole = scene.corrected(shot, correction);
+  ASSERT_LT(correction.far_scale(), 1.0);
+  const std::vector<std::uint32_t> subset{scene.wall[5], scene.ceiling[1]};
+  std::vector<double> ff = whole;
+  for (std::uint32_t i : subset) ff[i] = shot[i];  // what the back end gives the re-shot receivers
+  correction.apply(scene.shooter(), scene.view, subset, ff);
+  EXPECT_EQ(ff, whole);
+}
+
 }  // namespace
 }  // namespace aarad::refine
