@@ -644,5 +644,36 @@ TEST(NearField, ASubsetRewritesItsOwnReceiversOnly) {
   EXPECT_EQ(ff, whole);
 }
 
+// apply() after candidates() looks at the listed receivers in receiver order, as a scan of every receiver does, also
+// when the patch ids run the other way: the same receivers corrected in the same order, the same factors bit for bit.
+TEST(NearField, CandidatesAreListedInReceiverOrderWhateverThePatchIds) {
+  Junction scene;
+  ReceiverView view;
+  std::vector<Polygon> pieces = grid(Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 0), scene.n, scene.n);
+  const std::uint32_t count = static_cast<std::uint32_t>(pieces.size());
+  std::vector<Vec3> centroids(count);
+  std::vector<double> radii(count);
+  const Plane plane = plane_of(pieces.front());
+  for (std::uint32_t k = 0; k < count; ++k) {
+    const std::uint32_t patch = count - 1 - k;  // the last receiver is patch 0
+    view.add(pieces[k], plane, 1, patch);
+    centroids[patch] = centroid(pieces[k]);
+    radii[patch] = glm::length(pieces[k][0] - centroids[patch]);
+  }
+  scene.view = view;
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> shot = scene.shoot(backend);
+  NearFieldCorrection listing(4.0), scanning(4.0);
+  listing.set_patches(centroids, radii);
+  listing.candidates(scene.shooter(), scene.view);
+  std::vector<double> listed = shot, scanned = shot;
+  listing.apply(scene.shooter(), scene.view, {}, listed);
+  scanning.apply(scene.shooter(), scene.view, {}, scanned);
+  const auto order = [](std::span<const std::uint32_t> s) { return std::vector<std::uint32_t>(s.begin(), s.end()); };
+  EXPECT_EQ(order(listing.last_corrected()), order(scanning.last_corrected()));
+  EXPECT_EQ(listing.last_corrected().size(), pieces.size());
+  EXPECT_EQ(listed, scanned);
+}
+
 }  // namespace
 }  // namespace aarad::refine
