@@ -1,6 +1,7 @@
 #include "formfactor/receiver_view.h"
 
 #include "core/error.h"
+#include "core/polygon.h"
 
 #include <algorithm>
 #include <atomic>
@@ -78,8 +79,19 @@ void ReceiverView::append_from(const ReceiverView& other, std::uint32_t first, s
   patches_.insert(patches_.end(), other.patches_.begin() + first, other.patches_.begin() + last);
 }
 
+// A polygon wound the other way round its plane's normal gets a negative factor from the analytic back end and
+// nothing from the hemicubes, which take it for a back face: refused. Only a polygon clearly facing away is (its
+// vector area more than half its length against the normal); a sliver whose vector area is a rounding error passes.
+void ReceiverView::check_winding(std::span<const Vec3> polygon, const Plane& plane) const {
+  const Vec3 vector = vector_area(polygon);
+  if (glm::dot(vector, plane.normal) < -0.5 * glm::length(vector))
+    throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
+                " runs clockwise seen from the side its plane's normal points to; reverse its corners or its plane");
+}
+
 std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
                                 std::uint32_t patch) {
+  check_winding(polygon, plane);
   for (const Vec3& p : polygon) {
     corner_points_.push_back(static_cast<std::uint32_t>(points_.size()));
     points_.push_back(p);
@@ -92,6 +104,7 @@ std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const s
   if (keys.size() != polygon.size())
     throw Error("ReceiverView::add: " + std::to_string(keys.size()) + " keys for " + std::to_string(polygon.size()) +
                 " corners");
+  check_winding(polygon, plane);
   // On a conflict, the view is left as it was: the keys bound and the points added by this call are taken back.
   const std::size_t old_points = points_.size(), old_corners = corner_points_.size();
   for (std::size_t k = 0; k < polygon.size(); ++k) {

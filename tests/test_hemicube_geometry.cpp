@@ -172,7 +172,7 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
   testing::add(view, testing::rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0}), 1, 1);  // faces up: culled
   testing::add(view, testing::rectangle({1, 0, 0}, {1, 0, 0}, {0, 1, 0}), 2, 2);  // coplanar with the point
   // A second piece of patch 0 with a plane that would not face the point: the patch decides.
-  view.add(testing::rectangle({0, 0, 2}, {0, 1, 0}, {1, 0, 0}), Plane{{0, 0, 1}, -2.0}, 0, 0);
+  view.add(testing::rectangle({0, 0, 2}, {1, 0, 0}, {0, 1, 0}), Plane{{0, 0, 1}, -2.0}, 0, 0);
   BackFaceCulling culling;
   const auto faces = [&](const ReceiverView& v) {
     culling.decide(Vec3(0), v);
@@ -199,7 +199,7 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
   ReceiverView sparse;
   testing::add(sparse, testing::rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 1u << 30);
   EXPECT_EQ(faces(sparse), (std::vector<bool>{true}));
-  sparse.add(testing::rectangle({0, 0, 2}, {0, 1, 0}, {1, 0, 0}), Plane{{0, 0, 1}, -2.0}, 0, 1u << 30);
+  sparse.add(testing::rectangle({0, 0, 2}, {1, 0, 0}, {0, 1, 0}), Plane{{0, 0, 1}, -2.0}, 0, 1u << 30);
   EXPECT_EQ(faces(sparse), (std::vector<bool>{true, false}));  // each receiver's own plane
 }
 
@@ -226,6 +226,33 @@ TEST(HemicubeGeometry, ReceiverViewRefusesConflictingKeysAndStaysAsItWas) {
   ASSERT_EQ(view.corner_points().size(), view.vertices().size());
   for (std::size_t k = 0; k < view.vertices().size(); ++k)
     EXPECT_EQ(view.points()[view.corner_points()[k]], view.vertices()[k]) << k;
+}
+
+// A receiver wound clockwise round its plane's normal got -0.2395 from the analytic back end and 0 from both
+// hemicubes (a back face): refused, by both add()s, with the view left as it was. A polygon of zero area passes.
+TEST(HemicubeGeometry, ReceiverViewRefusesAPolygonWoundAgainstItsPlane) {
+  using testing::rectangle;
+  const Plane down{{0, 0, -1}, 1.0};  // z = 1, facing a shooter at the origin
+  const Polygon counter = rectangle({-0.5, -0.5, 1}, {0, 1, 0}, {1, 0, 0});  // counter-clockwise round -z
+  const Polygon clockwise(counter.rbegin(), counter.rend());
+  const std::uint32_t keys[4] = {0, 1, 2, 3};
+  ReceiverView view;
+  view.add(counter, down, 0, 0);
+  const std::uint64_t revision = view.revision();
+  try {
+    view.add(clockwise, down, 0, 1);
+    ADD_FAILURE() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "ReceiverView::add: receiver 1 runs clockwise seen from the side its plane's normal points "
+                           "to; reverse its corners or its plane");
+  }
+  EXPECT_THROW(view.add(clockwise, keys, down, 0, 1), Error);
+  EXPECT_EQ(view.size(), 1u);
+  EXPECT_EQ(view.points().size(), 4u);
+  EXPECT_EQ(view.revision(), revision);
+  const Polygon flat = {{0, 0, 1}, {1, 0, 1}, {2, 0, 1}};
+  EXPECT_NO_THROW(view.add(flat, down, 0, 2));
+  EXPECT_NO_THROW(view.add(counter, keys, down, 0, 3));
 }
 
 TEST(HemicubeGeometry, ReceiverViewRevisionNamesItsContents) {
