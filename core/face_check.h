@@ -14,7 +14,8 @@
 namespace aarad {
 
 // A face is planar when no vertex lies farther than this fraction of its bounding-box diagonal from its plane;
-// its area is zero when below this fraction of the squared diagonal.
+// its area is zero when twice its area (the length of its Newell sum) is below this fraction of the squared
+// diagonal.
 inline constexpr double kPlanarity = 1e-6;
 inline constexpr double kZeroAreaFraction = 1e-12;
 // The range of scales the solver computes in: no coordinate beyond kMaxCoordinate in magnitude, no face smaller
@@ -32,7 +33,7 @@ enum class FaceProblem {
   kTooSmall,                // a bounding-box diagonal below kMinFaceSize
   kCollinear,               // all vertices on one line (no two edges from a vertex span an area)
   kSelfIntersecting,        // two edges cross or touch (decided exactly on the projection to its plane)
-  kZeroArea,                // a simple boundary enclosing no area (Newell area below kZeroAreaFraction x size^2)
+  kZeroArea,                // a simple boundary enclosing no area (twice its area below kZeroAreaFraction x size^2)
 };
 
 // What check_face finds. With a problem, the fields after `problem` are valid up to the step that found it.

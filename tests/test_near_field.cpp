@@ -542,7 +542,7 @@ TEST(NearField, NothingToShapeLeavesTheShotAsItWas) {
 
 // With a table of patches, the receivers of every near patch are candidates, also of the patch with the largest id
 // (the table's last), and apply() to a whole shot looks at receivers added to the view since candidates() (the
-// view's revision stays, its size does not).
+// add changes the view's revision, so the candidates are found again).
 TEST(NearField, CandidatesCoverTheLastPatchAndReceiversAddedSince) {
   Junction scene;
   // The wall's pieces are patches 10 .. 73, the table's last; the ceiling's ids lie past the table (never near).

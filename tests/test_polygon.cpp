@@ -91,7 +91,8 @@ TEST(Polygon, polygon_centroid_of_known_polygons) {
 // (4, 1)) and must count negatively. A strip 5 x 1 and three 1 x 1 teeth on it: area 8, centroid x 5/2 by symmetry,
 // y (5 x 1/2 + 3 x 3/2) / 8 = 7/8.
 TEST(Polygon, polygon_centroid_of_a_polygon_not_star_shaped_from_its_first_vertex) {
-  const std::vector<Vec2> comb{{0, 0}, {5, 0}, {5, 2}, {4, 2}, {4, 1}, {3, 1}, {3, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  const std::vector<Vec2> comb{{0, 0}, {5, 0}, {5, 2}, {4, 2}, {4, 1}, {3, 1},
+                               {3, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
   EXPECT_DOUBLE_EQ(area(lift(comb)), 8.0);
   const Vec3 c = centroid(lift(comb));
   EXPECT_NEAR(c.x, 2.5, 1e-15);
