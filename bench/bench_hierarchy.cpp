@@ -6,9 +6,11 @@
 // within 1.5x across the sizes, under 1 KiB per leaf. Also: building the surfaces and the hierarchy of a scene of
 // many surfaces (BM_BuildTerrain) and of a tessellated ball (BM_BuildSurfacesBall), and the check for faces lying
 // on one another in a scene of many coplanar surfaces (BM_CoplanarOverlapsCubes) and in the shapes it was once
-// quadratic on (BM_CoplanarOverlapsDecals, BM_CoplanarOverlapsPlanks).
+// quadratic on (BM_CoplanarOverlapsDecals, BM_CoplanarOverlapsPlanks); meshing and checking a floor with many
+// holes (BM_FloorWithHoles).
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
+#include "mesh/invariants.h"
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
@@ -137,6 +139,46 @@ void BM_BuildTerrain(benchmark::State& state) {
 }
 
 BENCHMARK(BM_BuildTerrain)->Arg(50)->Arg(100)->Arg(200)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// A floor with n x n square holes (where boxes stand, cut out as the Cornell box's floor is): the unit cells of a
+// (2n + 1) x (2n + 1) grid without the cells (odd, odd), 3 n^2 + 4 n + 1 faces of one surface, which the Delaunay
+// mesher takes as a whole. Reported: the initial meshing (the Hierarchy's constructor) and the invariant checker
+// on the result, thread CPU time per face. Finding the holes' seeds tried every face for every triangle, and the
+// checker's no-crack test every boundary segment for every boundary edge: both quadratic (n = 128: 50 s).
+void BM_FloorWithHoles(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  aarad::Scene scene;
+  scene.name = "floor with holes";
+  const std::uint32_t grey = scene.add_material(aarad::Material{"grey", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("floor");
+  for (int j = 0; j <= 2 * n; ++j)
+    for (int i = 0; i <= 2 * n; ++i) {
+      if (i % 2 == 1 && j % 2 == 1) continue;  // a hole
+      const double x = i, z = j;
+      scene.add_face(group, grey, {Vec3(x, 0, z), Vec3(x, 0, z + 1), Vec3(x + 1, 0, z + 1), Vec3(x + 1, 0, z)});
+    }
+  scene.build_surfaces();
+  double meshing_seconds = 0.0, check_seconds = 0.0;
+  std::size_t leaves = 0, violations = 0;
+  for (auto _ : state) {
+    const double t0 = thread_seconds();
+    const Hierarchy h(scene, aarad::mesh::MeshingOptions{});
+    const double t1 = thread_seconds();
+    violations = aarad::mesh::check_invariants(h).size();
+    const double t2 = thread_seconds();
+    leaves = h.leaf_count();
+    meshing_seconds += t1 - t0;
+    check_seconds += t2 - t1;
+  }
+  if (violations != 0) state.SkipWithError("the floor's mesh breaks an invariant");
+  const double faces = static_cast<double>(scene.faces.size()), runs = static_cast<double>(state.iterations());
+  state.counters["faces"] = faces;
+  state.counters["leaves"] = static_cast<double>(leaves);
+  state.counters["meshing_us_per_face"] = 1e6 * meshing_seconds / runs / faces;
+  state.counters["check_us_per_face"] = 1e6 * check_seconds / runs / faces;
+}
+
+BENCHMARK(BM_FloorWithHoles)->Arg(16)->Arg(32)->Arg(64)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // A ball: a unit sphere about the origin tessellated into n rings of 2n quads, each cut into two triangles (one
 // at the poles), one group and one smoothing group: 4 n^2 - 2 n faces, each in a plane of its own, every plane at
