@@ -369,9 +369,13 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
       cuts.clear();
       const auto first = std::lower_bound(vertices.begin(), vertices.end(), std::min(a.x, b.x) - weld,
                                           [](const Vec2& p, double x) { return p.x < x; });
+      // A vertex within `weld` of the edge lies within `weld` of its y range too: the others are passed over
+      // before any arithmetic (with twice the margin, against rounding), which an edge along y, whose x range
+      // holds a whole column of a surface's vertices, meets for nearly all of them.
+      const double y_low = std::min(a.y, b.y) - 2.0 * weld, y_high = std::max(a.y, b.y) + 2.0 * weld;
       for (auto it = first; it != vertices.end() && it->x <= std::max(a.x, b.x) + weld; ++it) {
         const Vec2& v = *it;
-        if (v == a || v == b) continue;
+        if (v.y < y_low || v.y > y_high || v == a || v == b) continue;
         const double t = glm::dot(v - a, d) / length2;
         if (!(t > 0.0 && t < 1.0)) continue;
         const Vec2 off = v - (a + t * d);
