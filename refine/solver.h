@@ -180,9 +180,9 @@ class Solver {
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
   void take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
                               std::span<const mesh::NodeId> new_leaves, const Rgb& shot_flux);
-  // After the near-field correction: scales the new leaves of every split leaf that was reshaped (see reshaped_) or
-  // has a corrected piece so that together they get the factor it had received, and marks them reshaped.
-  void share_out_reshaped_factors(mesh::NodeId first_new);
+  // After the near-field correction: scales the new leaves of every split leaf so that together they get the factor
+  // it had received.
+  void share_out_split_factors(mesh::NodeId first_new);
   // Makes luminance_ and largest_reflected_ current for the receiver view (and deposits_ with them).
   void update_luminance();
   // Rebuilds deposits_ and emission_ when the receiver view changed.
@@ -211,18 +211,6 @@ class Solver {
   // is the shot's flux times this factor.
   std::vector<double> received_factor_;
   std::vector<mesh::NodeId> factor_written_;  // the nodes whose received_factor_ the current shot set
-  // Per NodeId: 1 when the leaf's factor in the current shot is not the back end's alone (the near-field correction
-  // set it, or it is a piece scaled to share what a split leaf had): the pieces of such a leaf, should it be split
-  // in the same shot, are scaled to its factor whether or not the correction reaches them.
-  std::vector<std::uint8_t> reshaped_;
-  std::vector<mesh::NodeId> reshaped_written_;  // the nodes whose reshaped_ flag the current shot set
-  void mark_reshaped(mesh::NodeId node);
-  // Per surface: 1 when it lies on another surface (or on itself) in one plane, facing the same way
-  // (Scene::coplanar_overlaps): a rug laid on a floor. Where two surfaces coincide, which of them a pixel goes to
-  // depends on the sizes of the leaves competing for it, so the pieces of a split leaf there need not get together
-  // what the leaf got: they are scaled to it, as reshaped pieces are.
-  std::vector<std::uint8_t> overlapping_surface_;
-  bool any_overlap_ = false;
   // Per NodeId: 1 when the hierarchy refused to split the node (deepest level, smallest area, or already split).
   // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
   // shot after shot: the refusal is asked once instead of recomputing the children's areas every time.
