@@ -277,6 +277,20 @@ SurfaceMeshing mesh_triangle(std::span<const Vec3> c, double patch_size, double 
   return out;
 }
 
+// How far off its surface's plane a corner may lie and keep its bits (mesh_surface says why): 1e-12 of the scene's
+// diagonal, or 16 units in the last place of the largest coordinate of `points`.
+double plane_slack(std::span<const Vec3> points, double diagonal) {
+  double largest = 0.0;
+  for (const Vec3& p : points) largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  return std::max(1e-12 * diagonal, 16.0 * std::numeric_limits<double>::epsilon() * largest);
+}
+
+// `p` moved onto `plane` when it lies farther than `slack` off it.
+Vec3 onto_plane(const Vec3& p, const Plane& plane, double slack) {
+  const double distance = plane.signed_distance(p);
+  return std::abs(distance) > slack ? p - distance * plane.normal : p;
+}
+
 // Any other surface: constrained Delaunay mesh of the union of its faces (shared edges and T-junctions
 // between its faces become shared triangulation vertices, so the result conforms), then elements.
 // Per point, 1 when it lies in one of the polygons (contains). Trying every polygon for every point was quadratic
@@ -319,7 +333,15 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   // The mesher makes triangles with edges up to patch_size, of area 0.433 patch_size^2 at most (equilateral):
   // refuse a size that cannot stay within the budget before refining.
   budget.check(surface.area / (0.433 * patch_size * patch_size), "patches", "patch size", patch_size);
-  const Frame frame = frame_of(surface.plane, scene.faces[surface.faces.front()].vertices.front());
+  // Input vertices keep their 3D positions (a neighbouring surface has the same points), but those that import let
+  // off the surface's plane are moved onto it, as mesh_surface moves a grid's corners, and so is the frame's origin,
+  // from which the mesher's new points are placed: a wall with a window, rotated and written with six decimals, had
+  // corners up to 2.6e-7 off its plane (the invariant allows 1e-9 of the diagonal).
+  std::vector<Vec3> surface_points;
+  for (const std::uint32_t fi : surface.faces)
+    surface_points.insert(surface_points.end(), scene.faces[fi].vertices.begin(), scene.faces[fi].vertices.end());
+  const double slack = plane_slack(surface_points, budget.diagonal);
+  const Frame frame = frame_of(surface.plane, onto_plane(surface_points.front(), surface.plane, slack));
   std::vector<std::vector<Vec2>> polygons;
   std::map<std::pair<double, double>, Vec3> original;  // 2D position of an input vertex -> its 3D position
   Cdt cdt;
@@ -348,7 +370,7 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     std::vector<Vec2> polygon;
     for (const Vec3& v : face.vertices) {
       polygon.push_back(welded(frame.to_2d(v)));
-      original.emplace(std::make_pair(polygon.back().x, polygon.back().y), v);
+      original.emplace(std::make_pair(polygon.back().x, polygon.back().y), onto_plane(v, surface.plane, slack));
       vertices.push_back(polygon.back());
     }
     polygons.push_back(std::move(polygon));
@@ -459,13 +481,8 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
     // few such units of it, and moved by that rounding, the corners of two surfaces meeting along an edge were no
     // longer one point (a closed cube of side 0.7 at (1e5, 3e4, 0) had 78 distinct grid points instead of 56, and
     // its AA hemicube factors summed to 1 - 2.2e-3, taking each overlap for one surface in front of another).
-    double largest = 0.0;
-    for (const Vec3& p : *outline) largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-    const double off = std::max(1e-12 * diagonal, 16.0 * std::numeric_limits<double>::epsilon() * largest);
-    for (Vec3& p : *outline) {
-      const double distance = surface.plane.signed_distance(p);
-      if (std::abs(distance) > off) p -= distance * surface.plane.normal;
-    }
+    const double off = plane_slack(*outline, diagonal);
+    for (Vec3& p : *outline) p = onto_plane(p, surface.plane, off);
     if (strictly_convex_quad(*outline, frame)) return mesh_convex_quad(*outline, patch_size, element_size, budget);
     if (outline->size() == 3 && aarad::area(*outline) > 0.0)
       return mesh_triangle(*outline, patch_size, element_size, budget);
