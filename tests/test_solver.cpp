@@ -167,7 +167,7 @@ TEST(SolverEnergy, ClosedCubeFarFromTheOriginLosesNoLight) {
 // a shared pixel goes to depends on the sizes of the leaves competing for it, so the pieces of a split leaf need not
 // get together what the leaf got: the room, 6 x 3 x 6 with a lamp of 2 x 2 under its ceiling, lost 6.2 % of the
 // emitted flux in the lamp's four shots through the splits of the floor and the rug, and made 21 229 splits chasing
-// the loss (809 now). Split leaves of overlapping surfaces now give their pieces their own factor: nothing escapes.
+// the loss (809 now). The pieces of a split leaf now share what the leaf got: nothing escapes.
 TEST(SolverEnergy, ClosedRoomWithARugInTheFloorsPlaneLosesNoLightThroughSplits) {
   Scene scene;
   scene.name = "rug";
