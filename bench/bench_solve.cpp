@@ -3,12 +3,13 @@
 // N = 100, 300, 1200 and 2500 (seconds, shots, elements), and each method's furnace accuracy (element RMS
 // and worst deviation from the exact B = 2, converged to 1e-4; see docs/solver.md). Two more rows: the AA
 // hemicube at N = 100 with the shooting step overrelaxed by 1.2 (`--relaxation`) and with ambient overshooting
-// (`--overshoot`; docs/solver.md).
+// (`--overshoot`; docs/solver.md), and the AA hemicube at N = 100 computing every shot afresh (`--factor-cache 0`:
+// every other row reuses a patch's factors when it shoots again, as `aarad solve` does by default).
 //
 //   bench_solve [--budget SECONDS] [--scenes cornell,office,furnace] [--threads N] [--methods LIST]
 //
-// LIST is comma-separated BACKEND:N[:RELAXATION[:overshoot]] (default: the six rows of docs/benchmarks.md,
-// "Solver", and the AA hemicube with ambient overshooting).
+// LIST is comma-separated BACKEND:N[:RELAXATION[:overshoot][:afresh]] (default: the six rows of docs/benchmarks.md,
+// "Solver", the AA hemicube with ambient overshooting and the AA hemicube with every shot afresh).
 //
 // A run that exceeds the budget is stopped after its current shot and reported with the unshot flux it reached.
 // Prints a Markdown table on stdout (docs/benchmarks.md, "Solver").
@@ -34,6 +35,7 @@ struct Method {
   int resolution;
   double relaxation = 1.0;
   bool overshoot = false;
+  bool afresh = false;  // SolverOptions::factor_cache_mib = 0
 };
 
 struct Result {
@@ -56,6 +58,7 @@ Result solve(const Scene& scene, const Method& method, double converge, int shoo
   options.adaptive = adaptive;
   options.relaxation = method.relaxation;
   options.overshoot = method.overshoot;
+  if (method.afresh) options.factor_cache_mib = 0;
   options.meshing = refine::default_meshing(scene);
   refine::Solver solver(scene, options);
   solver.run([&](const refine::Progress& p) { return p.seconds < budget; });
@@ -86,22 +89,29 @@ std::string cell(const Result& r) {
   return text;
 }
 
-// "aa-hemicube:100:1.2,hemicube:300" -> methods; nullopt when an item does not parse.
+// "aa-hemicube:100:1.2,hemicube:300,aa-hemicube:100:1:afresh" -> methods; nullopt when an item does not parse.
 std::optional<std::vector<Method>> parse_methods(const std::string& list) {
   std::vector<Method> methods;
   std::size_t start = 0;
   while (start <= list.size()) {
     const std::size_t comma = std::min(list.find(',', start), list.size());
-    const std::string item = list.substr(start, comma - start);
-    const std::size_t colon = item.find(':');
-    if (colon == std::string::npos || colon == 0) return std::nullopt;
-    Method method{item.substr(0, colon), std::atoi(item.c_str() + colon + 1)};
-    const std::size_t second = item.find(':', colon + 1);
-    if (second != std::string::npos) method.relaxation = std::atof(item.c_str() + second + 1);
-    const std::size_t third = second == std::string::npos ? second : item.find(':', second + 1);
-    if (third != std::string::npos) {
-      if (item.substr(third + 1) != "overshoot") return std::nullopt;
-      method.overshoot = true;
+    std::vector<std::string> fields;
+    for (std::size_t from = start; from <= comma;) {
+      const std::size_t colon = std::min(list.find(':', from), comma);
+      fields.push_back(list.substr(from, colon - from));
+      from = colon + 1;
+    }
+    if (fields.size() < 2 || fields[0].empty()) return std::nullopt;
+    Method method{fields[0], std::atoi(fields[1].c_str())};
+    if (fields.size() > 2) method.relaxation = std::atof(fields[2].c_str());
+    for (std::size_t k = 3; k < fields.size(); ++k) {
+      if (fields[k] == "overshoot") {
+        method.overshoot = true;
+      } else if (fields[k] == "afresh") {
+        method.afresh = true;
+      } else {
+        return std::nullopt;
+      }
     }
     if (method.resolution < 2 || !(method.relaxation >= 1.0 && method.relaxation < 2.0)) return std::nullopt;
     methods.push_back(method);
@@ -116,8 +126,9 @@ int main(int argc, char** argv) {
   double budget = 600.0;
   std::string scenes = "cornell,office,furnace";
   int threads = 0;
-  std::vector<Method> methods{{"aa-hemicube", 100},          {"aa-hemicube", 100, 1.2}, {"aa-hemicube", 100, 1.0, true},
-                              {"hemicube", 100},             {"hemicube", 300},         {"hemicube", 1200},
+  std::vector<Method> methods{{"aa-hemicube", 100},         {"aa-hemicube", 100, 1.2}, {"aa-hemicube", 100, 1.0, true},
+                              {"aa-hemicube", 100, 1.0, false, true},
+                              {"hemicube", 100},            {"hemicube", 300},         {"hemicube", 1200},
                               {"hemicube", 2500}};
   bool usage = false;
   for (int i = 1; i < argc; ++i) {
@@ -138,7 +149,7 @@ int main(int argc, char** argv) {
   if (usage) {
     std::fprintf(stderr,
                  "usage: %s [--budget SECONDS] [--scenes cornell,office,furnace] [--threads N]\n"
-                 "          [--methods BACKEND:N[:RELAXATION[:overshoot]],...]\n",
+                 "          [--methods BACKEND:N[:RELAXATION[:overshoot][:afresh]],...]\n",
                  argv[0]);
     return 2;
   }
@@ -146,9 +157,9 @@ int main(int argc, char** argv) {
   if (threads > 0) control.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   const auto wants = [&](const char* name) { return scenes.find(name) != std::string::npos; };
 
-  std::printf("| method | resolution | relaxation | overshoot | Cornell box (to 1 %%) | office (to 1 %%) "
+  std::printf("| method | resolution | relaxation | overshoot | factors | Cornell box (to 1 %%) | office (to 1 %%) "
               "| furnace RMS / worst (to 1e-4) |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   const Scene cornell = make_cornell_box();
   const Scene office = make_office();
@@ -165,9 +176,9 @@ int main(int argc, char** argv) {
                     r.finished ? "" : ", stopped");
       furnace_cell = text;
     }
-    std::printf("| %s | %d | %g | %s | %s | %s | %s |\n", method.backend.c_str(), method.resolution,
-                method.relaxation, method.overshoot ? "ambient" : "-", cornell_cell.c_str(), office_cell.c_str(),
-                furnace_cell.c_str());
+    std::printf("| %s | %d | %g | %s | %s | %s | %s | %s |\n", method.backend.c_str(), method.resolution,
+                method.relaxation, method.overshoot ? "ambient" : "-", method.afresh ? "afresh" : "reused",
+                cornell_cell.c_str(), office_cell.c_str(), furnace_cell.c_str());
     std::fflush(stdout);
   }
   return 0;

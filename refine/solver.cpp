@@ -76,6 +76,9 @@ std::vector<SamplePoint> patch_samples(const std::vector<Vec3>& corners, int n) 
   return samples;
 }
 
+// The largest factor cache (SolverOptions::factor_cache_mib), a pebibyte: its size in bytes fits any size_t.
+constexpr std::int64_t kLargestFactorCacheMib = std::int64_t{1} << 30;
+
 // How far a shooting point is lifted off its surface (compute_form_factors): 1e-9 of the scene's diagonal, and
 // at least 16 units in the last place of the scene's largest coordinate. The centroid and the plane are only known
 // to a few of those units, and far from the origin they exceed the first: in a closed cube of side 0.7 at
@@ -109,7 +112,10 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
       hierarchy_(scene, options.meshing),
       backend_(std::move(backend)),
       shooter_lift_(shooter_lift(scene)),
-      near_field_(options.near_field) {
+      near_field_(options.near_field),
+      factor_cache_(options.factor_cache_mib > 0 && options.factor_cache_mib <= kLargestFactorCacheMib
+                        ? static_cast<std::size_t>(options.factor_cache_mib) << 20
+                        : 0) {
   // Library callers set SolverOptions fields, `aarad solve` users the options: the messages name both.
   const auto refuse = [](const std::string& field, const std::string& option, const std::string& range, double value) {
     std::ostringstream message;
@@ -127,6 +133,9 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
     refuse("shooter_samples", "--shooter-samples", "in [1, 64]", options_.shooter_samples);
   }
   if (!(options_.near_field >= 0.0)) refuse("near_field", "--near-field", ">= 0", options_.near_field);
+  if (options_.factor_cache_mib < 0 || options_.factor_cache_mib > kLargestFactorCacheMib) {
+    refuse("factor_cache_mib", "--factor-cache", "in [0, 1073741824]", static_cast<double>(options_.factor_cache_mib));
+  }
   initialise();
 }
 
@@ -239,54 +248,143 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   const Vec3 lift = normal * shooter_lift_;
   const Vec3 centroid = hierarchy_.centroid(shooter);
   const std::vector<Vec3> corners = hierarchy_.corners(shooter);
+  // The points the back end shoots from, with their weights.
   std::vector<Vec3> points;
   std::vector<double> weights;
-  NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), {}, {}, {}};
+  if (options_.shooter_samples <= 1) {
+    points.push_back(centroid + lift);
+    weights.push_back(1.0);
+  } else {
+    for (const SamplePoint& sample : patch_samples(corners, options_.shooter_samples)) {
+      points.push_back(sample.position + lift);
+      weights.push_back(sample.weight);
+    }
+  }
+  NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), points, weights, {}};
   const bool near_field = near_field_.reach() > 0.0;
   // With the near-field correction, the back end keeps the unoccluded factors of the receivers it may correct
   // (taken into `into`, which is left empty when the back end has none).
-  bool kept = near_field && backend_->keep_unoccluded(near_field_.candidates(near, cache_.view()));
+  const std::span<const std::uint8_t> candidates =
+      near_field ? near_field_.candidates(near, cache_.view()) : std::span<const std::uint8_t>{};
+  bool kept = near_field && backend_->keep_unoccluded(candidates);
   const auto take_unoccluded = [&](std::vector<double>& into) {
     into.assign(ff_.size(), 0.0);
     if (!backend_->add_unoccluded(into)) into.clear();
   };
-  if (options_.shooter_samples <= 1) {
-    points.push_back(centroid + lift);
-    weights.push_back(1.0);
-    backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), subset, ff_);
-    if (kept) take_unoccluded(unoccluded_);
-  } else {
-    const auto samples = patch_samples(corners, options_.shooter_samples);
-    ff_sample_.assign(ff_.size(), 0.0);
-    const auto for_each_receiver = [&](auto&& body) {
-      if (subset.empty()) {
-        for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
-      } else {
-        for (std::uint32_t i : subset) body(i);
-      }
-    };
-    for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
-    if (kept) unoccluded_.assign(ff_.size(), 0.0);
-    for (const SamplePoint& sample : samples) {
-      points.push_back(sample.position + lift);
-      weights.push_back(sample.weight);
-      backend_->compute(formfactor::Shooter::from_normal(points.back(), normal), cache_.view(), subset, ff_sample_);
-      for_each_receiver([&](std::uint32_t i) { ff_[i] += sample.weight * ff_sample_[i]; });
-      if (kept) {
-        take_unoccluded(unoccluded_sample_);
-        kept = !unoccluded_sample_.empty();
-        for (std::size_t i = 0; kept && i < unoccluded_.size(); ++i) unoccluded_[i] += sample.weight * unoccluded_sample_[i];
+  // A whole shot from a patch whose last whole shot is kept shoots only into the leaves split since.
+  const FactorRow* row = subset.empty() ? factor_cache_.find(shooter, &hierarchy_.impl()) : nullptr;
+  std::span<const std::uint32_t> shot = subset;
+  if (row != nullptr) {
+    shot = factors_from_row(*row, kept);
+    ++reused_shots_;
+  }
+  if (row == nullptr || !shot.empty()) {
+    // The unoccluded factors of `shot`: into unoccluded_, or beside the row's there.
+    std::vector<double>& shot_unoccluded = row != nullptr ? unoccluded_shot_ : unoccluded_;
+    if (points.size() == 1) {
+      backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), shot, ff_);
+      if (kept) take_unoccluded(shot_unoccluded);
+    } else {
+      ff_sample_.assign(ff_.size(), 0.0);
+      const auto for_each_receiver = [&](auto&& body) {
+        if (shot.empty()) {
+          for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
+        } else {
+          for (std::uint32_t i : shot) body(i);
+        }
+      };
+      for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
+      if (kept) shot_unoccluded.assign(ff_.size(), 0.0);
+      for (std::size_t p = 0; p < points.size(); ++p) {
+        backend_->compute(formfactor::Shooter::from_normal(points[p], normal), cache_.view(), shot, ff_sample_);
+        for_each_receiver([&](std::uint32_t i) { ff_[i] += weights[p] * ff_sample_[i]; });
+        if (kept) {
+          take_unoccluded(unoccluded_sample_);
+          kept = !unoccluded_sample_.empty();
+          for (std::size_t i = 0; kept && i < shot_unoccluded.size(); ++i)
+            shot_unoccluded[i] += weights[p] * unoccluded_sample_[i];
+        }
       }
     }
+    if (row != nullptr && kept && !unoccluded_shot_.empty()) {
+      for (std::uint32_t i : shot) unoccluded_[i] = unoccluded_shot_[i];
+    }
+    // The pieces of each split leaf share the factor it had (share_out_split_factors).
+    if (row != nullptr) share_out_split_factors(static_cast<mesh::NodeId>(row->node_count));
   }
   if (!kept) unoccluded_.clear();
+  if (subset.empty()) keep_row(shooter, candidates);
   if (near_field) {
-    near.points = points;
-    near.weights = weights;
     near.unoccluded = unoccluded_;
     near_field_.apply(near, cache_.view(), subset, ff_);
   }
   times_.form_factors += seconds_since(start);
+}
+
+// The row holds the back end's factors of the leaves that got one from the patch's last whole shot. A leaf that is
+// still a leaf gets its factor as it was: the back end would give it the same, as nothing but splits changed the
+// receivers, and a split leaf's pieces tile it exactly (in a pixel the AA hemicube's coverage list then holds pieces
+// of one plane at one depth where it held the leaf, which shade what lies behind them as the leaf did; the classical
+// hemicube gives the pieces the leaf's pixel centres). A leaf split since has its pieces shot again, every receiver
+// occluding, and they share its factor in proportion to what they get. Leaves that got nothing get nothing now,
+// their pieces too. The near-field correction is then made as for a shot computed afresh.
+std::span<const std::uint32_t> Solver::factors_from_row(const FactorRow& row, bool unoccluded) {
+  subset_.clear();
+  for (std::size_t k = 0; k < row.nodes.size(); ++k) {
+    const mesh::NodeId node = row.nodes[k];
+    if (hierarchy_.is_leaf(node)) {
+      ff_[cache_.receiver(node)] = row.factors[k];
+      continue;
+    }
+    // share_out_split_factors reads the factor the split leaf had from received_factor_; the next shot clears it.
+    received_factor_[node] = row.factors[k];
+    factor_written_.push_back(node);
+    for (mesh::NodeId leaf : hierarchy_.leaves_under(node)) subset_.push_back(cache_.receiver(leaf));
+  }
+  std::sort(subset_.begin(), subset_.end());
+  if (unoccluded) {
+    unoccluded_.assign(ff_.size(), 0.0);
+    for (std::size_t k = 0; k < row.near_nodes.size(); ++k) {
+      const mesh::NodeId node = row.near_nodes[k];
+      if (hierarchy_.is_leaf(node)) unoccluded_[cache_.receiver(node)] = row.near_unoccluded[k];
+    }
+  }
+  return subset_;
+}
+
+void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
+  if (!factor_cache_.enabled()) return;
+  // Sized exactly, in the memory of the patch's previous row when it had one.
+  const auto near = [&](std::uint32_t i) {
+    return ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
+  };
+  std::size_t count = 0, near_count = 0;
+  for (std::uint32_t i = 0; i < ff_.size(); ++i) {
+    count += ff_[i] > 0.0;
+    near_count += near(i);
+  }
+  FactorRow row = factor_cache_.take(shooter);
+  row.node_count = hierarchy_.node_count();
+  const auto size = [](auto& values, std::size_t n) {
+    if (values.capacity() < n || values.capacity() > 2 * n) values = {};
+    values.reserve(n);
+    values.clear();
+  };
+  size(row.nodes, count);
+  size(row.factors, count);
+  size(row.near_nodes, near_count);
+  size(row.near_unoccluded, near_count);
+  for (std::uint32_t i = 0; i < ff_.size(); ++i) {
+    if (!(ff_[i] > 0.0)) continue;
+    row.nodes.push_back(cache_.leaf(i));
+    row.factors.push_back(ff_[i]);
+    // The near-field correction reads the unoccluded factors of its candidates that got a factor.
+    if (near(i)) {
+      row.near_nodes.push_back(cache_.leaf(i));
+      row.near_unoccluded.push_back(unoccluded_[i]);
+    }
+  }
+  factor_cache_.store(shooter, &hierarchy_.impl(), std::move(row));
 }
 
 inline const Rgb& Solver::deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
@@ -321,14 +419,14 @@ bool Solver::shoot(const PatchScan& scan) {
   const double area = hierarchy_.area(shooter);
   const Rgb shot_flux = hierarchy_.unshot(shooter) * (relaxation * area) + overshoot * area;
 
-  ff_.assign(cache_.size(), 0.0);
-  compute_form_factors(shooter, {});
-
-  hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
   // received_factor_ holds this shot's factor per node: clear what the previous shot wrote (not all nodes).
   for (mesh::NodeId node : factor_written_) received_factor_[node] = 0.0;
   factor_written_.clear();
   received_factor_.resize(hierarchy_.node_count(), 0.0);
+  ff_.assign(cache_.size(), 0.0);
+  compute_form_factors(shooter, {});
+
+  hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
   touched_.clear();
   const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces

@@ -11,6 +11,7 @@
 #include "core/scene.h"
 #include "formfactor/backend.h"
 #include "mesh/hierarchy.h"
+#include "refine/factor_cache.h"
 #include "refine/near_field.h"
 #include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
@@ -49,6 +50,10 @@ struct SolverOptions {
   // centroid, and smaller than it, take the shape of their share from the patch's exact factor seen from their
   // centroid; 0 turns it off (the paper's method: every factor from the shooting point).
   double near_field = 4.0;
+  // Memory, in MiB, for the form factors of each patch's last shot (refine/factor_cache.h): a patch that shoots
+  // again takes them, shooting only into the leaves split since, whose pieces share the factor the leaf had. The
+  // least recently used patches' factors are given up beyond it; 0 computes every shot afresh (docs/solver.md).
+  std::int64_t factor_cache_mib = 2048;
   // Patch and element sizes, max level, min area, balance. The default is the hierarchy's (zeros: sizes relative
   // to the scene's diagonal), not what `aarad solve` uses for a scene that names its sizes (the built-in Cornell
   // box and office, an OBJ file with "# aarad meshing:"): set it to default_meshing(scene) to solve as the program
@@ -138,6 +143,10 @@ class Solver {
   int max_leaf_level() const;
   // Number of leaves split by substructuring so far (balancing splits included).
   std::int64_t splits() const { return splits_; }
+  // Shots that took their patch's factors from its previous shot (SolverOptions::factor_cache_mib), and the
+  // memory those factors take now.
+  std::int64_t reused_shots() const { return reused_shots_; }
+  std::size_t factor_cache_bytes() const { return factor_cache_.bytes(); }
 
   // Sets every inner node's B to the area-weighted mean of its children (bottom-up). run() calls it at the
   // end; call it after driving shoot_once() by hand before reading inner nodes.
@@ -159,6 +168,13 @@ class Solver {
   bool shoot(const PatchScan& scan);
   // Fills ff_ for the receivers in `subset` (all when empty), averaging over the shooter's sample points.
   void compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset);
+  // A whole shot from a patch with a row in factor_cache_: puts the row's back-end factors into ff_ (and its
+  // unoccluded ones into unoccluded_ when `unoccluded`), the factors of the leaves split since into
+  // received_factor_, and their leaves now into subset_, which it returns.
+  std::span<const std::uint32_t> factors_from_row(const FactorRow& row, bool unoccluded);
+  // Keeps the back end's factors of a whole shot (ff_, and unoccluded_ of the near-field candidates) as the
+  // shooter's row.
+  void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
   const Material& material(mesh::NodeId node) const;
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
   struct Deposit;
@@ -205,8 +221,11 @@ class Solver {
   std::vector<double> ff_;         // per receiver: form factor of the current shot
   std::vector<double> ff_sample_;  // per receiver: one sample point's factors
   NearFieldCorrection near_field_;
+  FactorCache factor_cache_;
+  std::int64_t reused_shots_ = 0;
   std::vector<double> unoccluded_;         // per receiver: the back end's factors with nothing occluding
   std::vector<double> unoccluded_sample_;  // the same, for one sample point
+  std::vector<double> unoccluded_shot_;    // the same, for the leaves a reused row shoots into
   // Per NodeId: the form factor of the current shot to the node when it received (leaves); the flux it received
   // is the shot's flux times this factor.
   std::vector<double> received_factor_;

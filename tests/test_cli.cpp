@@ -167,6 +167,7 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
       {"solve --threads 2x", "must be a whole number in [0, 1024]"},
       {"solve --width 0", "must be a whole number in [1, 16384]"},
       {"solve --shooter-samples 99999999999999999999", "must be a whole number in [1, 64]"},
+      {"solve --factor-cache -1", "must be a whole number in [0, 1073741824]"},
       {"formfactors cornell --from light --resolution 2.0", "must be a whole number in [2, 8192]"},
   };
   for (const auto& [command, expected] : cases) {

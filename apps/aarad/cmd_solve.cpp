@@ -333,6 +333,11 @@ void add_solve_command(CLI::App& app) {
                   "of their share from the patch's exact factor seen from them (0: off, the paper's method)")
       ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
+  cmd->add_option("--factor-cache", options->solver.factor_cache_mib,
+                  "MiB for each patch's last form factors, reused when it shoots again, shooting only into the "
+                  "elements split since (0: every shot computed afresh)")
+      ->transform(whole_number_in(0, std::int64_t{1} << 30))
+      ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Worker threads (0: all cores) [0, 1024]")
       ->transform(whole_number_in(0, 1024))
       ->capture_default_str();
