@@ -182,7 +182,8 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
 TEST(Cli, IntegerOptionsWithLeadingZerosAreDecimal) {
   const fs::path dir = work_dir();
   ProgramRun r = aarad("solve cornell --resolution 010 --max-shots 010 --max-level 09 --shooter-samples 02 "
-                       "--threads 08 --width 010 --height 012 --json --quiet --out " + (dir / "zeros").string());
+                       "--threads 08 --width 010 --height 012 --factor-cache 010 --json --quiet --out " +
+                       (dir / "zeros").string());
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json report = nlohmann::json::parse(r.out);
   EXPECT_EQ(report["resolution"], 10);
@@ -190,6 +191,7 @@ TEST(Cli, IntegerOptionsWithLeadingZerosAreDecimal) {
   EXPECT_EQ(report["options"]["max_shots"], 10);
   EXPECT_EQ(report["options"]["max_level"], 9);
   EXPECT_EQ(report["options"]["shooter_samples"], 2);
+  EXPECT_EQ(report["options"]["factor_cache_mib"], 10);
   // flat.png is 10 x 12: the PNG header holds the width and the height as big-endian words at bytes 16 and 20.
   const std::string png = slurp(dir / "zeros" / "flat.png");
   ASSERT_GE(png.size(), 24u);

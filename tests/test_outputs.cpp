@@ -390,6 +390,11 @@ TEST(OutputsReport, FurnaceGroupsFluxesAndTimes) {
   EXPECT_NE(solver.max_leaf_level(), 8);
   EXPECT_EQ(report["splits"], solver.splits());
   EXPECT_NE(solver.splits(), solver.shots());  // no split, many shots
+  // Shots that reused their patch's factors: no split, so all but the first of each patch.
+  EXPECT_EQ(report["reused_shots"], solver.reused_shots());
+  EXPECT_GT(solver.reused_shots(), 0);
+  EXPECT_LT(solver.reused_shots(), solver.shots());
+  EXPECT_EQ(report["options"]["factor_cache_mib"], 2048);
   EXPECT_EQ(report["ambient"], rgb_json(solver.ambient()));
   EXPECT_EQ(report["unshot_flux"], rgb_json(solver.unshot_flux()));
   EXPECT_NE(rgb_json(solver.ambient()), rgb_json(solver.unshot_flux()));
