@@ -85,8 +85,10 @@ HalfedgeHandle connect(LeafMesh& mesh, FaceHandle f, VertexHandle a, VertexHandl
 // The midpoint of the edge from corner a (the loop halfedge `out_of_a` leaves it) to corner b of one face:
 // reused when a neighbour already put it on the loop (the same expression 0.5 (a + b) gives the same bits
 // from both sides), else a new vertex inserted into the loop piece that contains it, which makes it a
-// hanging vertex of the face across that piece.
-VertexHandle midpoint_on_chain(LeafMesh& mesh, HalfedgeHandle out_of_a, VertexHandle b) {
+// hanging vertex of the face across that piece: `gained` is that face (invalid when the midpoint was reused or
+// the piece lies on the boundary).
+VertexHandle midpoint_on_chain(LeafMesh& mesh, HalfedgeHandle out_of_a, VertexHandle b, FaceHandle& gained) {
+  gained = FaceHandle();
   const VertexHandle a = mesh.from_vertex_handle(out_of_a);
   const OpenMesh::Vec3d pa = mesh.point(a), pb = mesh.point(b);
   const OpenMesh::Vec3d mid = 0.5 * (pa + pb);
@@ -98,6 +100,7 @@ VertexHandle midpoint_on_chain(LeafMesh& mesh, HalfedgeHandle out_of_a, VertexHa
   while (mesh.to_vertex_handle(h) != b &&
          OpenMesh::dot(mesh.point(mesh.to_vertex_handle(h)) - pa, d) / dd < 0.5)
     h = mesh.next_halfedge_handle(h);
+  gained = mesh.opposite_face_handle(h);
   const VertexHandle m = mesh.add_vertex(mid);
   mesh.split_edge(mesh.edge_handle(h), m);
   return m;
@@ -199,6 +202,7 @@ NodeId Hierarchy::Impl::add_node(NodeId parent_id, int node_level, NodeId patch_
   radiosity.emplace_back();
   unshot.emplace_back();
   face.push_back(-1);
+  loop_revision.push_back(revision);
   return id;
 }
 
@@ -220,6 +224,7 @@ Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(
   m.options = resolve_options(scene, options);
   m.mesh.add_property(m.face_node, "node");
   m.boundaries.resize(scene.surfaces.size());
+  m.revision = 1;  // the initial leaves' loop_revision
   double made = 0.0;  // initial elements so far, against max_initial_elements
   const double diagonal = scene.diagonal();
   for (std::uint32_t s = 0; s < scene.surfaces.size(); ++s) {
@@ -259,7 +264,6 @@ Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(
     }
     m.boundaries[s] = boundary_of(m.mesh, base, static_cast<int>(m.mesh.n_vertices()));
   }
-  m.revision = 1;
 }
 
 Hierarchy::~Hierarchy() = default;
@@ -313,10 +317,27 @@ Vec3 Hierarchy::centroid(NodeId node) const {
   return aarad::centroid(std::span<const Vec3>(p.data(), static_cast<std::size_t>(n)));
 }
 void Hierarchy::leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const {
+  std::vector<std::uint32_t> vertices;
+  leaf_polygon(leaf, out, vertices);
+}
+void Hierarchy::leaf_polygon(NodeId leaf, std::vector<Vec3>& out, std::vector<std::uint32_t>& vertices) const {
   require_leaf(leaf, "leaf_polygon");
   out.clear();
+  vertices.clear();
   const LeafMesh& mesh = impl_->mesh;
-  for (auto v : mesh.fv_range(FaceHandle(impl_->face[leaf]))) out.push_back(to_vec3(mesh.point(v)));
+  const HalfedgeHandle first =
+      halfedge_out_of(mesh, FaceHandle(impl_->face[leaf]), VertexHandle(impl_->corners[leaf][0]));
+  HalfedgeHandle h = first;
+  do {
+    const VertexHandle v = mesh.from_vertex_handle(h);
+    out.push_back(to_vec3(mesh.point(v)));
+    vertices.push_back(static_cast<std::uint32_t>(v.idx()));
+    h = mesh.next_halfedge_handle(h);
+  } while (h != first);
+}
+std::uint64_t Hierarchy::loop_revision(NodeId leaf) const {
+  require_leaf(leaf, "loop_revision");
+  return impl_->loop_revision[leaf];
 }
 
 Rgb& Hierarchy::radiosity(NodeId node) { return impl_->radiosity[node]; }
@@ -382,7 +403,8 @@ std::size_t Hierarchy::memory_bytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   std::size_t total = bytes(m.parent) + bytes(m.child_begin) + bytes(m.child_count) + bytes(m.child_ids) +
                       bytes(m.level) + bytes(m.patch_of) + bytes(m.surface) + bytes(m.corners) + bytes(m.area) +
-                      bytes(m.radiosity) + bytes(m.unshot) + bytes(m.face) + bytes(m.patch_ids);
+                      bytes(m.radiosity) + bytes(m.unshot) + bytes(m.face) + bytes(m.loop_revision) +
+                      bytes(m.patch_ids);
   total += m.mesh.n_vertices() * (sizeof(LeafMesh::Vertex) + sizeof(LeafMesh::Point)) +
            m.mesh.n_edges() * sizeof(LeafMesh::Edge) + m.mesh.n_faces() * (sizeof(LeafMesh::Face) + sizeof(NodeId));
   return total;
@@ -410,13 +432,17 @@ std::vector<NodeId> Hierarchy::edge_neighbours(NodeId node) const {
 std::array<NodeId, 4> Hierarchy::split_leaf(NodeId node) {
   Impl& m = *impl_;
   LeafMesh& mesh = m.mesh;
+  ++m.revision;  // the children's and the neighbours' loop_revision
   const FaceHandle f(m.face[node]);
   const int n = m.corner_count(node);
   std::array<VertexHandle, 4> c, mid;
   for (int k = 0; k < n; ++k) c[static_cast<std::size_t>(k)] = VertexHandle(m.corners[node][static_cast<std::size_t>(k)]);
-  for (int k = 0; k < n; ++k)
-    mid[static_cast<std::size_t>(k)] =
-        midpoint_on_chain(mesh, halfedge_out_of(mesh, f, c[static_cast<std::size_t>(k)]), c[static_cast<std::size_t>((k + 1) % n)]);
+  for (int k = 0; k < n; ++k) {
+    FaceHandle gained;
+    mid[static_cast<std::size_t>(k)] = midpoint_on_chain(mesh, halfedge_out_of(mesh, f, c[static_cast<std::size_t>(k)]),
+                                                         c[static_cast<std::size_t>((k + 1) % n)], gained);
+    if (gained.is_valid()) m.loop_revision[mesh.property(m.face_node, gained)] = m.revision;
+  }
   // The loop halfedge leaving each corner stays with the child at that corner through the edge insertions.
   std::array<HalfedgeHandle, 4> out_of_corner;
   for (int k = 0; k < n; ++k) out_of_corner[static_cast<std::size_t>(k)] = halfedge_out_of(mesh, f, c[static_cast<std::size_t>(k)]);
@@ -464,7 +490,6 @@ std::array<NodeId, 4> Hierarchy::split_leaf(NodeId node) {
     mesh.property(m.face_node, child_face[ku]) = ids[ku];
   }
   m.leaf_count += 3;
-  ++m.revision;
   return ids;
 }
 

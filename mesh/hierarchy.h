@@ -76,9 +76,16 @@ class Hierarchy {
   // except where faces of one surface touch at that point only (each fan of elements around it has its own copy,
   // so the leaf mesh stays manifold).
   std::array<std::uint32_t, 4> corner_vertices(NodeId node) const;
-  // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise. Throws
-  // aarad::Error when `leaf` is not a leaf (as edge_neighbours does).
+  // The leaf's face loop: its corners and the hanging vertices on its edges, counter-clockwise from its first
+  // corner. Throws aarad::Error when `leaf` is not a leaf (as edge_neighbours does).
   void leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const;
+  // The same with every point's vertex index in `vertices`, in the same order (shared as corner_vertices' are: the
+  // leaves on either side of an edge name its hanging vertices with the same indices).
+  void leaf_polygon(NodeId leaf, std::vector<Vec3>& out, std::vector<std::uint32_t>& vertices) const;
+  // The revision() at which the leaf's face loop last changed: when the leaf was made, or when a neighbour's split
+  // put a new hanging vertex on one of its edges. A copy of the loops taken at revision r still holds every leaf
+  // whose loop_revision is at most r.
+  std::uint64_t loop_revision(NodeId leaf) const;
 
   // Radiosity B of every node and unshot radiosity dB (meaningful for patches), per channel.
   Rgb& radiosity(NodeId node);
@@ -113,7 +120,8 @@ class Hierarchy {
   std::size_t memory_bytes() const;
 
   // Splits leaf `node` into four (quads into four quads, triangles into four triangles). Edge midpoints a
-  // neighbour already made are reused; an unsplit neighbour gains the midpoint as a hanging vertex.
+  // neighbour already made are reused; an unsplit neighbour gains the midpoint as a hanging vertex (and its
+  // loop_revision becomes the new revision).
   // Children inherit the parent's B and unshot 0. Refused (ok = false) when the node is not a leaf, when
   // its level is max_level, when a child would be smaller than min_area, or when the node is too small for its
   // children's corners to be distinct points in floating point. With balance on, neighbours

@@ -56,6 +56,7 @@ struct Hierarchy::Impl {
   std::vector<Rgb> radiosity;
   std::vector<Rgb> unshot;
   std::vector<int> face;  // face index of a leaf, -1 for an inner node
+  std::vector<std::uint64_t> loop_revision;  // the revision at which a leaf's face loop last changed
 
   std::vector<NodeId> patch_ids;
   std::vector<SurfaceBoundary> boundaries;  // per surface
@@ -63,7 +64,7 @@ struct Hierarchy::Impl {
   std::size_t leaf_count = 0;
   std::uint64_t revision = 0;
 
-  // Appends a node; returns its id.
+  // Appends a node, made at the current revision; returns its id.
   NodeId add_node(NodeId parent_id, int node_level, NodeId patch_id, std::uint32_t surface_id,
                   const std::array<int, 4>& corner_vertices);
   int corner_count(NodeId node) const { return corners[node][3] < 0 ? 3 : 4; }

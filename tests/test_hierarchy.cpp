@@ -441,13 +441,31 @@ TEST(HierarchySplit, NeighbourGainsHangingVertexAndMidpointIsReused) {
   const std::size_t vertices = mesh.n_vertices();  // 6
   ASSERT_EQ(vertices, 6u);
 
+  EXPECT_EQ(h.loop_revision(left), h.revision());
   ASSERT_TRUE(h.split(right).ok);
   EXPECT_EQ(mesh.n_vertices(), vertices + 5);  // four midpoints and the centre
   std::vector<Vec3> polygon;
-  h.leaf_polygon(left, polygon);  // L gained the midpoint (1, 0.5) of the shared edge
+  std::vector<std::uint32_t> loop_vertices;
+  h.leaf_polygon(left, polygon, loop_vertices);  // L gained the midpoint (1, 0.5) of the shared edge
   ASSERT_EQ(polygon.size(), 5u);
-  EXPECT_NE(std::find(polygon.begin(), polygon.end(), Vec3(1, 0.5, 0)), polygon.end());
   EXPECT_EQ(h.corners(left).size(), 4u);  // but keeps its four corners
+  // The loop runs from the first corner, and names its points by vertex: the midpoint is the one R's pieces have.
+  const std::vector<Vec3> corners = h.corners(left);
+  EXPECT_EQ(polygon[0], corners[0]);
+  const std::array<std::uint32_t, 4> corner_ids = h.corner_vertices(left);
+  EXPECT_EQ(loop_vertices[0], corner_ids[0]);
+  const auto midpoint = std::find(polygon.begin(), polygon.end(), Vec3(1, 0.5, 0));
+  ASSERT_NE(midpoint, polygon.end());
+  const std::uint32_t midpoint_id = loop_vertices[static_cast<std::size_t>(midpoint - polygon.begin())];
+  const std::array<std::uint32_t, 4> piece = h.corner_vertices(h.children(right)[0]);
+  EXPECT_NE(std::find(piece.begin(), piece.end(), midpoint_id), piece.end());
+  std::vector<Vec3> plain;
+  h.leaf_polygon(left, plain);
+  EXPECT_EQ(plain, polygon);
+  // L's loop changed with the split: its loop_revision is the split's revision, as R's pieces' is.
+  const std::uint64_t after_right = h.revision();
+  EXPECT_EQ(h.loop_revision(left), after_right);
+  EXPECT_EQ(h.loop_revision(h.children(right)[0]), after_right);
   // L's neighbours across the hanging vertex are the two left children of R.
   auto neighbours = h.edge_neighbours(left);
   std::sort(neighbours.begin(), neighbours.end());
@@ -458,6 +476,8 @@ TEST(HierarchySplit, NeighbourGainsHangingVertexAndMidpointIsReused) {
 
   ASSERT_TRUE(h.split(left).ok);
   EXPECT_EQ(mesh.n_vertices(), vertices + 5 + 4);  // the shared midpoint was reused
+  for (const NodeId piece_of_right : h.children(right))  // and R's pieces' loops stayed as they were
+    EXPECT_EQ(h.loop_revision(piece_of_right), after_right);
   const auto violations = check_invariants(h);
   EXPECT_TRUE(violations.empty()) << describe(violations);
 }
@@ -484,6 +504,7 @@ TEST(HierarchySplit, RefusedAtMaximumLevelBelowMinimumAreaAndForInnerNodes) {
   // Queries of a leaf's face refuse an inner node (they read face -1).
   std::vector<Vec3> polygon;
   EXPECT_THROW(h.leaf_polygon(e, polygon), Error);
+  EXPECT_THROW(h.loop_revision(e), Error);
   EXPECT_THROW(h.edge_neighbours(e), Error);
   EXPECT_THROW(h.edge_neighbours(static_cast<NodeId>(h.node_count())), Error);
   EXPECT_NO_THROW(h.edge_neighbours(first.children[0]));
