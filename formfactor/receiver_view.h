@@ -12,7 +12,9 @@ namespace aarad::formfactor {
 
 // Receiver i is the convex or concave planar polygon
 //   vertices[offsets[i]] .. vertices[offsets[i + 1] - 1],
-// counter-clockwise seen from its front side (the side planes[i].normal points to).
+// counter-clockwise seen from its front side (the side planes[i].normal points to), of any number of vertices;
+// a vertex may lie on the segment between its neighbours (the solver's receivers carry the hanging vertices of their
+// leaves' edges, refine/receiver_cache.h).
 // surface[i] is its physical-surface id (pieces of one surface never occlude each other);
 // patch[i] is its parent patch id (back-face culling is decided per patch, as the paper does).
 //

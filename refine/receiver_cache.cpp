@@ -28,11 +28,10 @@ bool ReceiverCache::update(const mesh::Hierarchy& hierarchy) {
 }
 
 void ReceiverCache::add_leaf(formfactor::ReceiverView& view, const mesh::Hierarchy& hierarchy, mesh::NodeId leaf) {
-  hierarchy.corners(leaf, corners_);
-  // Corners keyed by their mesh vertex, so that the back ends transform a shared vertex once per shot.
-  const std::array<std::uint32_t, 4> keys = hierarchy.corner_vertices(leaf);
-  view.add(corners_, std::span<const std::uint32_t>(keys.data(), corners_.size()), hierarchy.plane(leaf),
-           hierarchy.surface(leaf), hierarchy.patch(leaf));
+  // The loop keyed by mesh vertex: the back ends transform a shared vertex once per shot, and the leaves on either
+  // side of an edge project its hanging vertices to the same pixel coordinates.
+  hierarchy.leaf_polygon(leaf, loop_, loop_vertices_);
+  view.add(loop_, loop_vertices_, hierarchy.plane(leaf), hierarchy.surface(leaf), hierarchy.patch(leaf));
 }
 
 bool ReceiverCache::update_after_splits(const mesh::Hierarchy& hierarchy, const std::vector<mesh::NodeId>& leaves) {
@@ -46,12 +45,19 @@ bool ReceiverCache::update_after_splits(const mesh::Hierarchy& hierarchy, const 
   }
   next_.start_from_points_of(view_);
   next_.reserve(leaves.size(), leaves.size() * 4);
-  // Old receivers in runs of consecutive indices.
+  // Old receivers in runs of consecutive indices; a leaf whose loop changed after the old view was built (a
+  // neighbour's split gave it a hanging vertex) is read again in its place.
+  const auto unchanged = [&](mesh::NodeId leaf) { return hierarchy.loop_revision(leaf) <= revision_; };
   std::size_t i = 0;
   while (i < kept) {
+    if (!unchanged(leaves[i])) {
+      add_leaf(next_, hierarchy, leaves[i++]);
+      ++reread_leaves_;
+      continue;
+    }
     const std::uint32_t first = receiver_of_node_[leaves[i]];
     std::uint32_t last = first + 1;
-    for (++i; i < kept && receiver_of_node_[leaves[i]] == last; ++i) ++last;
+    for (++i; i < kept && receiver_of_node_[leaves[i]] == last && unchanged(leaves[i]); ++i) ++last;
     next_.append_from(view_, first, last);
   }
   for (; i < leaves.size(); ++i) add_leaf(next_, hierarchy, leaves[i]);

@@ -1,7 +1,8 @@
-// The solver's receiver cache (refine/receiver_cache.h): after splits it copies the receivers of the leaves that
-// stayed from its previous view and reads only the new leaves from the hierarchy. That view must be the one a
-// fresh build gives: the same receivers in the same order, corner for corner, with one shared point per distinct
-// corner position. The neighbour table (refine/neighbour_table.h) copies lists the same way and must equal the
+// The solver's receiver cache (refine/receiver_cache.h): a receiver is its leaf's loop, hanging vertices included.
+// After splits the cache copies the receivers of the leaves that stayed from its previous view and reads from the
+// hierarchy only the new leaves and those whose loops gained a hanging vertex. That view must be the one a fresh
+// build gives: the same receivers in the same order, vertex for vertex, with one shared point per distinct vertex
+// position. The neighbour table (refine/neighbour_table.h) copies lists the same way and must equal the
 // hierarchy's edge-neighbours.
 #include "core/builtin_scenes.h"
 #include "formfactor/backend.h"
@@ -9,6 +10,7 @@
 #include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
 #include "solver_test_scenes.h"
+#include "test_hierarchy_scenes.h"
 
 #include <gtest/gtest.h>
 
@@ -86,7 +88,42 @@ TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
     }
     EXPECT_EQ(cache.incremental_rebuilds(), 12u) << "balance " << balance;
     EXPECT_GT(cache.size(), hierarchy.initial_element_count());
+    // Leaves that stayed gained hanging vertices, and were read again.
+    EXPECT_GT(cache.view().max_polygon_size(), 4u) << "balance " << balance;
+    EXPECT_GT(cache.reread_leaves(), 0u) << "balance " << balance;
   }
+}
+
+// The rectangle [0, 2] x [0, 1] cut into 4 x 2 leaves of 0.5, and the leaf [0.5, 1] x [0, 0.5] split: its three
+// neighbours, which stay, gain the midpoints of the edges they share with it. The cache reads those three again (each
+// is five points now, the midpoint keyed to the same point as the pieces' corner there) and copies the other four.
+TEST(SolverReceiverCache, LeavesThatGainedAHangingVertexAreReadAgain) {
+  mesh::Hierarchy hierarchy(test::rectangle_scene(), {.patch_size = 2.0, .element_size = 0.5});
+  ASSERT_EQ(hierarchy.leaf_count(), 8u);
+  ReceiverCache cache;
+  cache.update(hierarchy);
+  mesh::NodeId split = mesh::kNoNode;
+  for (const mesh::NodeId leaf : hierarchy.leaves())
+    if (hierarchy.centroid(leaf) == Vec3(0.75, 0.25, 0.0)) split = leaf;
+  ASSERT_NE(split, mesh::kNoNode);
+  const std::uint64_t before = hierarchy.revision();
+  const std::size_t first_new = hierarchy.node_count();
+  ASSERT_TRUE(hierarchy.split(split).ok);
+  ASSERT_TRUE(cache.update(hierarchy));
+  EXPECT_EQ(cache.incremental_rebuilds(), 1u);
+  EXPECT_EQ(cache.reread_leaves(), 3u);
+  std::size_t gained = 0;
+  for (const mesh::NodeId leaf : hierarchy.leaves()) {
+    const auto polygon = cache.view().polygon(cache.receiver(leaf));
+    if (leaf < first_new) {  // the leaves that stayed
+      EXPECT_EQ(polygon.size() > 4u, hierarchy.loop_revision(leaf) > before) << "leaf " << leaf;
+      gained += polygon.size() == 5u ? 1u : 0u;
+    }
+  }
+  EXPECT_EQ(gained, 3u);
+  ReceiverCache fresh;
+  fresh.update(hierarchy);
+  expect_same_view(cache, fresh);
 }
 
 TEST(SolverReceiverCache, NeighbourTableAfterSplitsIsTheHierarchysAdjacency) {
