@@ -76,6 +76,18 @@ HalfedgeHandle halfedge_out_of(const LeafMesh& mesh, FaceHandle f, VertexHandle 
   return HalfedgeHandle();
 }
 
+// Calls visit(v) for every vertex v of the leaf's face loop, counter-clockwise from its first corner.
+template <class Visit>
+void walk_leaf_loop(const Hierarchy::Impl& m, NodeId leaf, Visit&& visit) {
+  const LeafMesh& mesh = m.mesh;
+  const HalfedgeHandle first = halfedge_out_of(mesh, FaceHandle(m.face[leaf]), VertexHandle(m.corners[leaf][0]));
+  HalfedgeHandle h = first;
+  do {
+    visit(mesh.from_vertex_handle(h));
+    h = mesh.next_halfedge_handle(h);
+  } while (h != first);
+}
+
 // Splits face f along a new edge a -> b (both on its loop); the new face holds a -> b and the old loop from b
 // back to a, f keeps b -> a and the old loop from a to b. Returns the halfedge a -> b.
 HalfedgeHandle connect(LeafMesh& mesh, FaceHandle f, VertexHandle a, VertexHandle b) {
@@ -317,23 +329,18 @@ Vec3 Hierarchy::centroid(NodeId node) const {
   return aarad::centroid(std::span<const Vec3>(p.data(), static_cast<std::size_t>(n)));
 }
 void Hierarchy::leaf_polygon(NodeId leaf, std::vector<Vec3>& out) const {
-  std::vector<std::uint32_t> vertices;
-  leaf_polygon(leaf, out, vertices);
+  require_leaf(leaf, "leaf_polygon");
+  out.clear();
+  walk_leaf_loop(*impl_, leaf, [&](VertexHandle v) { out.push_back(to_vec3(impl_->mesh.point(v))); });
 }
 void Hierarchy::leaf_polygon(NodeId leaf, std::vector<Vec3>& out, std::vector<std::uint32_t>& vertices) const {
   require_leaf(leaf, "leaf_polygon");
   out.clear();
   vertices.clear();
-  const LeafMesh& mesh = impl_->mesh;
-  const HalfedgeHandle first =
-      halfedge_out_of(mesh, FaceHandle(impl_->face[leaf]), VertexHandle(impl_->corners[leaf][0]));
-  HalfedgeHandle h = first;
-  do {
-    const VertexHandle v = mesh.from_vertex_handle(h);
-    out.push_back(to_vec3(mesh.point(v)));
+  walk_leaf_loop(*impl_, leaf, [&](VertexHandle v) {
+    out.push_back(to_vec3(impl_->mesh.point(v)));
     vertices.push_back(static_cast<std::uint32_t>(v.idx()));
-    h = mesh.next_halfedge_handle(h);
-  } while (h != first);
+  });
 }
 std::uint64_t Hierarchy::loop_revision(NodeId leaf) const {
   require_leaf(leaf, "loop_revision");
