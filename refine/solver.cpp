@@ -313,7 +313,8 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     if (row != nullptr) share_out_split_factors(static_cast<mesh::NodeId>(row->node_count));
   }
   if (!kept) unoccluded_.clear();
-  if (subset.empty()) keep_row(shooter, candidates);
+  // A row whose leaves are all still leaves stays as it is.
+  if (subset.empty() && (row == nullptr || !shot.empty())) keep_row(shooter, candidates);
   if (near_field) {
     near.unoccluded = unoccluded_;
     near_field_.apply(near, cache_.view(), subset, ff_);
