@@ -194,6 +194,8 @@ class Solver {
   std::vector<mesh::NodeId> steep_leaves_of_shot();
   std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves);
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
+  // Copies the factors of the receivers the shot reached (touched_, ff_) into received_factor_, by leaf.
+  void record_shot_factors();
   void take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
                               std::span<const mesh::NodeId> new_leaves, const Rgb& shot_flux);
   // After the near-field correction: scales the new leaves of every split leaf so that together they get the factor
@@ -227,7 +229,8 @@ class Solver {
   std::vector<double> unoccluded_sample_;  // the same, for one sample point
   std::vector<double> unoccluded_shot_;    // the same, for the leaves a reused row shoots into
   // Per NodeId: the form factor of the current shot to the node when it received (leaves); the flux it received
-  // is the shot's flux times this factor.
+  // is the shot's flux times this factor. Only substructuring reads it, and only after a split: the shot's own
+  // factors are copied in from ff_ then (record_shot_factors), not by every shot's deposit loop.
   std::vector<double> received_factor_;
   std::vector<mesh::NodeId> factor_written_;  // the nodes whose received_factor_ the current shot set
   // Per NodeId: 1 when the hierarchy refused to split the node (deepest level, smallest area, or already split).
