@@ -161,6 +161,13 @@ void Solver::initialise() {
     patch_table_.push_back({patch, hierarchy_.area(patch), material(patch).reflectance});
   }
   absorbed_flux_ = Rgb{};
+  shading_.clear();
+  const auto positive_zero = [](double e) { return e == 0.0 && !std::signbit(e); };  // B - (-0) is not B when B is -0
+  for (std::uint32_t surface = 0; surface < scene_.surfaces.size(); ++surface) {
+    const Material& m = scene_.material_of_surface(surface);
+    const Rgb& e = m.emission;
+    shading_.push_back({m.reflectance, e, !(positive_zero(e.r) && positive_zero(e.g) && positive_zero(e.b))});
+  }
   received_factor_.assign(nodes, 0.0);
   // The near-field correction's table of patches, by patch id (the receivers' patch ids are the patches' nodes).
   mesh::NodeId last_patch = 0;
@@ -388,20 +395,25 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
   factor_cache_.store(shooter, &hierarchy_.impl(), std::move(row));
 }
 
-inline const Rgb& Solver::deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
-                                  std::span<Rgb> unshot, Rgb& absorbed) {
-  const Rgb reflected = d.reflectance * incident;  // flux
+inline const Rgb& Solver::deposit(const Deposit& d, const SurfaceShading& shading, const Rgb& incident, double sign,
+                                  std::span<Rgb> radiosity, std::span<Rgb> unshot, Rgb& absorbed) {
+  const Rgb reflected = shading.reflectance * incident;  // flux
   Rgb& b = radiosity[d.leaf];
   b += reflected * d.inverse_area;
   unshot[d.patch] += reflected * d.inverse_patch_area;
-  absorbed += (Rgb(1.0) - d.reflectance) * incident * sign;
+  absorbed += (Rgb(1.0) - shading.reflectance) * incident * sign;
   return b;
+}
+
+inline double Solver::reflected_luminance(const Rgb& b, double luminance, const SurfaceShading& shading) {
+  return shading.emits ? (b - shading.emission).luminance() : luminance;
 }
 
 void Solver::receive(mesh::NodeId leaf, const Rgb& incident, double sign) {
   const mesh::NodeId patch = hierarchy_.patch(leaf);
-  deposit({material(leaf).reflectance, sign / hierarchy_.area(leaf), sign / hierarchy_.area(patch), leaf, patch},
-          incident, sign, hierarchy_.radiosities(), hierarchy_.unshots(), absorbed_flux_);
+  deposit({sign / hierarchy_.area(leaf), sign / hierarchy_.area(patch), leaf, patch},
+          shading_[hierarchy_.surface(leaf)], incident, sign, hierarchy_.radiosities(), hierarchy_.unshots(),
+          absorbed_flux_);
 }
 
 bool Solver::shoot_once() { return shoot(scan_patches()); }
@@ -448,19 +460,22 @@ bool Solver::shoot(const PatchScan& scan) {
   double* luminance = luminance_.data();
   const double* ff = ff_.data();
   const Deposit* deposits = deposits_.data();
-  const Rgb* emission = emission_.data();
+  const SurfaceShading* shading = shading_.data();
   Rgb absorbed = absorbed_flux_;
   double largest = largest_reflected_;
   for (std::size_t i = 0; i < count; ++i) {
     // A planar surface sends nothing to itself (its own elements included).
-    if (surfaces[i] == shooter_surface || !(ff[i] > 0.0)) continue;
+    const std::uint32_t surface = surfaces[i];
+    if (surface == shooter_surface || !(ff[i] > 0.0)) continue;
     const Deposit& d = deposits[i];  // receive(leaf, incident, 1) without the lookups
+    const SurfaceShading& s = shading[surface];
     const Rgb incident = shot_flux * ff[i];
     touched_.push_back(static_cast<std::uint32_t>(i));
-    const Rgb& b = deposit(d, incident, 1.0, radiosity, unshot, absorbed);
+    const Rgb& b = deposit(d, s, incident, 1.0, radiosity, unshot, absorbed);
     if (follow) {
-      luminance[i] = b.luminance();
-      largest = std::max(largest, (b - emission[i]).luminance());
+      const double l = b.luminance();
+      luminance[i] = l;
+      largest = std::max(largest, reflected_luminance(b, l, s));
     }
   }
   absorbed_flux_ = absorbed;
@@ -475,13 +490,10 @@ bool Solver::shoot(const PatchScan& scan) {
 void Solver::update_deposits() {
   if (deposits_revision_ == cache_.revision() && deposits_source_ == &hierarchy_.impl()) return;
   deposits_.resize(cache_.size());
-  emission_.resize(cache_.size());
   for (std::size_t i = 0; i < cache_.size(); ++i) {
     const mesh::NodeId leaf = cache_.leaf(i);
     const mesh::NodeId patch = hierarchy_.patch(leaf);
-    const Material& m = material(leaf);
-    deposits_[i] = {m.reflectance, 1.0 / hierarchy_.area(leaf), 1.0 / hierarchy_.area(patch), leaf, patch};
-    emission_[i] = m.emission;
+    deposits_[i] = {1.0 / hierarchy_.area(leaf), 1.0 / hierarchy_.area(patch), leaf, patch};
   }
   deposits_revision_ = cache_.revision();
   deposits_source_ = &hierarchy_.impl();
@@ -503,13 +515,15 @@ void Solver::update_luminance() {
   luminance_.resize(cache_.size());
   const std::span<const Rgb> radiosity = hierarchy_.radiosities();
   const std::span<const mesh::NodeId> leaves = cache_.leaves();
+  const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();
   largest_reflected_ = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, cache_.size(), 4096), 0.0,
       [&](const tbb::blocked_range<std::size_t>& range, double partial) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           const Rgb& b = radiosity[leaves[i]];
-          luminance_[i] = b.luminance();
-          partial = std::max(partial, (b - emission_[i]).luminance());
+          const double l = b.luminance();
+          luminance_[i] = l;
+          partial = std::max(partial, reflected_luminance(b, l, shading_[surfaces[i]]));
         }
         return partial;
       },

@@ -178,11 +178,15 @@ class Solver {
   const Material& material(mesh::NodeId node) const;
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
   struct Deposit;
+  struct SurfaceShading;
   // Adds rho x incident to the leaf's B and its patch's dB (scaled by the inverse areas of d) in the node arrays
-  // (hierarchy_.radiosities() and unshots()), and sign x (1 - rho) x incident to `absorbed` (the absorbed flux).
-  // Returns the leaf's new B. Static and inline, so that a shot's loop of deposits keeps its sums in registers.
-  static const Rgb& deposit(const Deposit& d, const Rgb& incident, double sign, std::span<Rgb> radiosity,
-                            std::span<Rgb> unshot, Rgb& absorbed);
+  // (hierarchy_.radiosities() and unshots()), and sign x (1 - rho) x incident to `absorbed` (the absorbed flux),
+  // rho being the reflectance of the leaf's surface, `shading`. Returns the leaf's new B. Static and inline, so
+  // that a shot's loop of deposits keeps its sums in registers.
+  static const Rgb& deposit(const Deposit& d, const SurfaceShading& shading, const Rgb& incident, double sign,
+                            std::span<Rgb> radiosity, std::span<Rgb> unshot, Rgb& absorbed);
+  // The luminance of B - E for a leaf of the surface with `shading` whose B has luminance `luminance`.
+  static double reflected_luminance(const Rgb& b, double luminance, const SurfaceShading& shading);
   // The loop of run(): shoots until converged, max_shots, or keep_going returns false. Progress reports the time
   // since `start` plus `total_before`.
   void shooting_loop(const std::function<bool(const Progress&)>& keep_going, std::chrono::steady_clock::time_point start,
@@ -203,7 +207,7 @@ class Solver {
   void share_out_split_factors(mesh::NodeId first_new);
   // Makes luminance_ and largest_reflected_ current for the receiver view (and deposits_ with them).
   void update_luminance();
-  // Rebuilds deposits_ and emission_ when the receiver view changed.
+  // Rebuilds deposits_ when the receiver view changed.
   void update_deposits();
 
   const Scene& scene_;
@@ -241,17 +245,25 @@ class Solver {
   std::vector<std::uint32_t> subset_;
   // Per receiver: edge-neighbours (receiver indices).
   NeighbourTable neighbours_;
-  // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it, with the
-  // areas' inverses (times the sign of the deposit when receive() builds one), and its emission.
+  // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it besides its
+  // surface's material, with the areas' inverses (times the sign of the deposit when receive() builds one).
+  // 24 bytes: the deposit loop reads it for nearly every receiver in every shot, from memory the hemicube's
+  // tasks have used in between.
   struct Deposit {
-    Rgb reflectance;
     double inverse_area = 0.0;        // 1 / A_e
     double inverse_patch_area = 0.0;  // 1 / A_j of its patch
     mesh::NodeId leaf = 0;
     mesh::NodeId patch = 0;
   };
   std::vector<Deposit> deposits_;
-  std::vector<Rgb> emission_;
+  // Per surface (the receivers' surfaces() index it): its material's reflectance rho and emission E, and whether
+  // E differs from +0 in some channel (when it does not, B - E is B bit for bit, and so is its luminance).
+  struct SurfaceShading {
+    Rgb reflectance;
+    Rgb emission;
+    bool emits = false;
+  };
+  std::vector<SurfaceShading> shading_;
   std::uint64_t deposits_revision_ = ~std::uint64_t{0};
   const mesh::Hierarchy::Impl* deposits_source_ = nullptr;
   // Per receiver, for substructuring: radiosity luminance, and 1 when it is to be split. The luminances and the
