@@ -26,6 +26,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -543,24 +544,38 @@ std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   std::vector<mesh::NodeId> candidates;
   const double threshold = options_.gradient * largest_reflected_;
   if (!(threshold > 0.0)) return candidates;
-  candidate_flag_.assign(cache_.size(), 0);
-  const auto flag = [this](std::uint32_t r) {
-    std::atomic_ref<std::uint8_t>(candidate_flag_[r]).store(1, std::memory_order_relaxed);
-  };
+  candidate_flag_.assign((cache_.size() + 7) / 8 * 8, 0);  // whole words of eight flags for the scan below
+  // Plain pointers in locals: through the members, every flag store (a byte, which may alias anything) made the
+  // loop load the tables' addresses and the threshold again.
+  const double* luminance = luminance_.data();
+  std::uint8_t* flags = candidate_flag_.data();
+  const std::uint32_t* touched = touched_.data();
+  const NeighbourTable& neighbours = neighbours_;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_.size(), 1024),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
+                    [luminance, flags, touched, threshold, &neighbours](const tbb::blocked_range<std::size_t>& range) {
+                      const auto flag = [flags](std::uint32_t r) {
+                        std::atomic_ref<std::uint8_t>(flags[r]).store(1, std::memory_order_relaxed);
+                      };
                       for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                        const std::uint32_t r = touched_[t];
-                        for (const std::uint32_t neighbour : neighbours_.of(r)) {
-                          if (too_steep(luminance_[r], luminance_[neighbour], threshold)) {
+                        const std::uint32_t r = touched[t];
+                        const double own = luminance[r];
+                        const std::span<const std::uint32_t> around = neighbours.of(r);
+                        for (const std::uint32_t neighbour : around) {
+                          if (too_steep(own, luminance[neighbour], threshold)) {
                             flag(r);
                             flag(neighbour);
                           }
                         }
                       }
                     });
-  for (std::size_t r = 0; r < cache_.size(); ++r)
-    if (candidate_flag_[r] != 0) candidates.push_back(cache_.leaf(r));  // by node id, as leaves are
+  // By node id, as leaves are. Flags are few: eight at a time.
+  for (std::size_t word = 0; word < candidate_flag_.size(); word += 8) {
+    std::uint64_t eight;
+    std::memcpy(&eight, flags + word, sizeof eight);
+    if (eight == 0) continue;
+    for (std::size_t r = word; r < word + 8; ++r)
+      if (flags[r] != 0) candidates.push_back(cache_.leaf(r));
+  }
   return candidates;
 }
 
