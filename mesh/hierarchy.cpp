@@ -353,6 +353,8 @@ Rgb& Hierarchy::unshot(NodeId node) { return impl_->unshot[node]; }
 const Rgb& Hierarchy::unshot(NodeId node) const { return impl_->unshot[node]; }
 std::span<Rgb> Hierarchy::radiosities() { return impl_->radiosity; }
 std::span<Rgb> Hierarchy::unshots() { return impl_->unshot; }
+std::span<const Rgb> Hierarchy::radiosities() const { return impl_->radiosity; }
+std::span<const Rgb> Hierarchy::unshots() const { return impl_->unshot; }
 
 void Hierarchy::add_radiosity(NodeId leaf, const Rgb& delta) {
   Impl& m = *impl_;

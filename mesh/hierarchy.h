@@ -96,6 +96,8 @@ class Hierarchy {
   // Valid until the next split adds nodes.
   std::span<Rgb> radiosities();
   std::span<Rgb> unshots();
+  std::span<const Rgb> radiosities() const;
+  std::span<const Rgb> unshots() const;
   // Adds `delta` to the radiosity of `leaf` and delta x area(leaf) / area(a) to every ancestor a, so each
   // inner node keeps the area-weighted mean of its leaves (an invariant check_invariants verifies). O(level).
   void add_radiosity(NodeId leaf, const Rgb& delta);

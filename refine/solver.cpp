@@ -161,6 +161,12 @@ void Solver::initialise() {
     emitted_flux_ += emission * hierarchy_.area(patch);
     patch_table_.push_back({patch, hierarchy_.area(patch), material(patch).reflectance});
   }
+  patch_reflectance_area_ = Rgb{};
+  patch_area_ = 0.0;
+  for (const PatchEntry& patch : patch_table_) {
+    patch_reflectance_area_ += patch.reflectance * patch.area;
+    patch_area_ += patch.area;
+  }
   absorbed_flux_ = Rgb{};
   shading_.clear();
   const auto positive_zero = [](double e) { return e == 0.0 && !std::signbit(e); };  // B - (-0) is not B when B is -0
@@ -193,13 +199,16 @@ Rgb Solver::unshot_flux() const {
 Solver::PatchScan Solver::scan_patches() const {
   PatchScan scan;
   Rgb unshot{};  // sum |dB| A per channel, summed over channels at the end (as unshot_flux().sum())
-  // The ambient term's sums (Cohen et al. 1988, section 3.2).
-  Rgb reflectance_area{}, unshot_area{};
-  double area = 0.0;
+  // The ambient term's sums (Cohen et al. 1988, section 3.2); those over rho_i A_i and A_i do not change.
+  Rgb unshot_area{};
+  const Rgb& reflectance_area = patch_reflectance_area_;
+  const double area = patch_area_;
   // The shooter: the largest |dB| A summed over channels (strict: ties go to the lowest id, deterministically).
   double best_flux = 0.0;
+  // Through a pointer: hierarchy_.unshot() is an out-of-line call, once per patch per shot.
+  const Rgb* unshots = hierarchy_.unshots().data();
   for (const PatchEntry& patch : patch_table_) {
-    const Rgb& u = hierarchy_.unshot(patch.node);
+    const Rgb& u = unshots[patch.node];
     const Rgb magnitude(std::abs(u.r), std::abs(u.g), std::abs(u.b));
     unshot += magnitude * patch.area;
     const double flux = magnitude.sum() * patch.area;
@@ -207,9 +216,7 @@ Solver::PatchScan Solver::scan_patches() const {
       best_flux = flux;
       scan.shooter = patch.node;
     }
-    reflectance_area += patch.reflectance * patch.area;
     unshot_area += u * patch.area;
-    area += patch.area;
   }
   const double emitted = emitted_flux_.sum();
   scan.unshot_fraction = emitted > 0.0 ? unshot.sum() / emitted : 0.0;
@@ -230,7 +237,7 @@ Solver::PatchScan Solver::scan_patches() const {
     double best_shot = 0.0;
     mesh::NodeId shooter = mesh::kNoNode;
     for (const PatchEntry& patch : patch_table_) {
-      const Rgb shot = hierarchy_.unshot(patch.node) * relaxation + patch.reflectance * scan.ambient;
+      const Rgb shot = unshots[patch.node] * relaxation + patch.reflectance * scan.ambient;
       const double flux = (std::abs(shot.r) + std::abs(shot.g) + std::abs(shot.b)) * patch.area;
       if (flux > best_shot) {
         best_shot = flux;

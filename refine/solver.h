@@ -220,6 +220,9 @@ class Solver {
     Rgb reflectance;
   };
   std::vector<PatchEntry> patch_table_;
+  // The ambient term's sums that do not change, sum rho_i A_i and sum A_i over patch_table_, in its order.
+  Rgb patch_reflectance_area_{};
+  double patch_area_ = 0.0;
   std::unique_ptr<formfactor::FormFactorBackend> backend_;
   ReceiverCache cache_;
   double shooter_lift_ = 0.0;  // how far a shooting point is lifted off its surface (compute_form_factors)
