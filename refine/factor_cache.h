@@ -34,7 +34,8 @@ class FactorCache {
   explicit FactorCache(std::size_t budget_bytes) : budget_(budget_bytes) {}
 
   bool enabled() const { return budget_ > 0; }
-  // The row of `patch` for hierarchy state `source` (rows of another state are dropped), or nullptr. Marks it used.
+  // The row of `patch` for hierarchy state `source`, marked used; nullptr when it has none or the rows are of
+  // another state (which store() then drops).
   const FactorRow* find(mesh::NodeId patch, const void* source);
   // Takes the patch's row out (an empty one when it has none), for its memory to be filled again and stored.
   FactorRow take(mesh::NodeId patch);
@@ -43,7 +44,6 @@ class FactorCache {
   void store(mesh::NodeId patch, const void* source, FactorRow row);
 
   std::size_t bytes() const { return bytes_; }
-  std::size_t rows() const { return rows_.size(); }
 
   static std::size_t bytes_of(const FactorRow& row) {
     return sizeof(FactorRow) + (row.nodes.capacity() + row.near_nodes.capacity()) * sizeof(mesh::NodeId) +
