@@ -95,7 +95,7 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint
 void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                               std::span<const std::uint32_t> subset, std::span<double> out) {
   check_shot(shooter, receivers, subset, out);
-  prepared_.prepare(shooter, receivers);
+  prepared_.prepare_subset(shooter, receivers, subset, geometry_);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
   sums_.start(tasks, geometry_.resolution(), prepared_, receivers.size());

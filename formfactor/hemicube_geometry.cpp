@@ -116,7 +116,7 @@ void TaskSums::start(const std::array<FaceTask, kFaceTasks>& tasks, int resoluti
     for (std::vector<double>& sums : sums_) sums.assign(receivers, 0.0);
   clean_ = false;
   tbb::parallel_for(0, kFaceTasks, [&](int k) {
-    prepared.task_receivers(tasks[static_cast<std::size_t>(k)], resolution, receivers_[static_cast<std::size_t>(k)]);
+    prepared.task_receivers(k, tasks[static_cast<std::size_t>(k)], resolution, receivers_[static_cast<std::size_t>(k)]);
   });
 }
 
@@ -252,20 +252,45 @@ std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face,
   return count;
 }
 
-void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
+void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receivers) {
   const std::size_t count = receivers.size();
-  const std::span<const Vec3> points = receivers.points();
+  const std::size_t points = receivers.points().size();
   shooter_ = shooter;
   offsets_ = receivers.offsets();
   corner_points_ = receivers.corner_points();
   planes_ = receivers.planes();
-  point_local_.resize(points.size());
-  point_code_.resize(points.size());
+  point_local_.resize(points);
+  point_code_.resize(points);
   outside_.resize(count);
   face_mask_.resize(count);
-
   culling_.decide(shooter.centre, receivers);
+}
 
+void PreparedReceivers::prepare_receiver(std::size_t i) {
+  if (!culling_.faces(i) || offsets_[i + 1] - offsets_[i] < 3) {
+    face_mask_[i] = 0;  // culled: no face looks at its local coordinates
+    return;
+  }
+  std::uint32_t all = ~0u, any = 0u;
+  for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
+    const std::uint32_t code = point_code_[corner_points_[v]];
+    all &= code;
+    any |= code;
+  }
+  outside_[i] = any;
+  std::uint8_t mask = 0;
+  for (int f = 0; f < kHemicubeFaces; ++f) {
+    if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
+  }
+  if ((any & kOutcodeUNotPositive) != 0) mask |= kMaskUNotPositive;
+  if ((any & kOutcodeUNotNegative) != 0) mask |= kMaskUNotNegative;
+  face_mask_[i] = mask;
+}
+
+void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
+  start(shooter, receivers);
+  subset_ = false;
+  const std::span<const Vec3> points = receivers.points();
   // Every point once (a vertex is a corner of up to four elements), then every receiver combines its corners'
   // outcodes.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
@@ -276,42 +301,216 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
                         point_code_[p] = frustum_outcode(q);
                       }
                     });
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      if (!culling_.faces(i) || offsets_[i + 1] - offsets_[i] < 3) {
-        face_mask_[i] = 0;  // culled: no face looks at its local coordinates
-        continue;
-      }
-      std::uint32_t all = ~0u, any = 0u;
-      for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
-        const std::uint32_t code = point_code_[corner_points_[v]];
-        all &= code;
-        any |= code;
-      }
-      outside_[i] = any;
-      std::uint8_t mask = 0;
-      for (int f = 0; f < kHemicubeFaces; ++f) {
-        if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
-      }
-      if ((any & kOutcodeUNotPositive) != 0) mask |= kMaskUNotPositive;
-      if ((any & kOutcodeUNotNegative) != 0) mask |= kMaskUNotNegative;
-      face_mask_[i] = mask;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, receivers.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) prepare_receiver(i);
+                    });
+  prepared_count_ = receivers.size();
 }
 
-void PreparedReceivers::task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const {
+bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
+  const std::size_t count = receivers.size();
+  if (balls_revision_ == receivers.revision() && balls_size_ == count) return balls_dense_;
+  balls_revision_ = receivers.revision();
+  balls_size_ = count;
+  const std::span<const std::uint32_t> patches = receivers.patches();
+  std::uint32_t max_patch = 0;
+  for (const std::uint32_t p : patches) max_patch = std::max(max_patch, p);
+  balls_dense_ = count > 0 && max_patch <= 16 * count + 1024;  // as BackFaceCulling decides per patch
+  if (!balls_dense_) return false;
+  // The receivers of each patch, in order (a counting sort by patch id).
+  const std::size_t patch_count = std::size_t{max_patch} + 1;
+  patch_first_.assign(patch_count + 1, 0);
+  for (const std::uint32_t p : patches) ++patch_first_[p + 1];
+  for (std::size_t p = 0; p < patch_count; ++p) patch_first_[p + 1] += patch_first_[p];
+  patch_receivers_.resize(count);
+  {
+    std::vector<std::uint32_t> next(patch_first_.begin(), patch_first_.end() - 1);
+    for (std::uint32_t i = 0; i < count; ++i) patch_receivers_[next[patches[i]]++] = i;
+  }
+  // Each ball is centred on the box of the patch's points, with the largest distance to them as radius
+  // (prepare_subset widens it for rounding).
+  balls_.resize(patch_count);
+  patch_bits_.resize(patch_count);
+  const std::span<const Vec3> points = receivers.points();
+  const std::span<const std::uint32_t> offsets = receivers.offsets(), corners = receivers.corner_points();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, patch_count, 64),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+      const auto for_each_point = [&](auto&& body) {
+        for (std::uint32_t k = patch_first_[p]; k < patch_first_[p + 1]; ++k) {
+          const std::uint32_t i = patch_receivers_[k];
+          for (std::uint32_t v = offsets[i]; v < offsets[i + 1]; ++v) body(points[corners[v]]);
+        }
+      };
+      for_each_point([&](const Vec3& q) {
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+      });
+      const Vec3 centre = 0.5 * (lo + hi);
+      double radius = 0.0;
+      for_each_point([&](const Vec3& q) { radius = std::max(radius, glm::length(q - centre)); });
+      balls_[p] = PatchBall{centre, radius};
+    }
+  });
+  return true;
+}
+
+namespace {
+
+// Whether a ball, its centre in the face coordinates of a task's face, may project onto a marked tile of the
+// task's mask (pixel coordinates as project_clipped's, moved left by `shift`). Over the ball, a lies in
+// [a0, a1] = centre.a -+ radius and l in [l - radius, l + radius], so l / a lies in the interval quotient; a
+// ball that reaches a <= 0 has no bound and may reach any tile. A margin of 1e-6 pixels covers the rounding.
+bool ball_may_cover(const Vec3& centre, double radius, bool top, double half, double shift, const TileMask& mask) {
+  const double a0 = centre.x - radius, a1 = centre.x + radius;
+  if (!(a1 > 0.0)) return false;  // wholly behind the face's apex: no point of it is in front of the face
+  if (!(a0 > 0.0)) return true;
+  const auto quotient = [&](double l, double& lo, double& hi) {
+    const double l0 = l - radius, l1 = l + radius;
+    lo = l0 / (l0 >= 0.0 ? a1 : a0);
+    hi = l1 / (l1 >= 0.0 ? a0 : a1);
+  };
+  double x0, x1, y0, y1;
+  quotient(centre.y, x0, x1);
+  quotient(centre.z, y0, y1);
+  constexpr double kMargin = 1e-6;
+  const double y_offset = top ? 1.0 : 0.0;
+  return mask.overlaps((x0 + 1.0) * half - shift - kMargin, (x1 + 1.0) * half - shift + kMargin,
+                       (y0 + y_offset) * half - kMargin, (y1 + y_offset) * half + kMargin);
+}
+
+}  // namespace
+
+void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverView& receivers,
+                                       std::span<const std::uint32_t> subset, const HemicubeGeometry& geometry) {
+  if (subset.empty() || !find_patch_balls(receivers)) {
+    prepare(shooter, receivers);
+    return;
+  }
+  start(shooter, receivers);
+  subset_ = true;
+  const std::size_t count = receivers.size();
+  const std::span<const Vec3> points = receivers.points();
+  const std::span<const std::uint32_t> patches = receivers.patches();
+  std::fill(face_mask_.begin(), face_mask_.end(), std::uint8_t{0});
+  task_bits_.assign(count, 0);
+  point_state_.assign(points.size(), kPointUnused);
+  // Transforms the points marked kPointWanted.
+  const auto transform_wanted = [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 2048),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t p = range.begin(); p != range.end(); ++p) {
+                          if (point_state_[p] != kPointWanted) continue;
+                          const Vec3 q = to_local(shooter, points[p]);
+                          point_local_[p] = q;
+                          point_code_[p] = frustum_outcode(q);
+                          point_state_[p] = kPointDone;
+                        }
+                      });
+  };
+  const auto want_points = [&](std::size_t i) {
+    for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
+      std::uint8_t& state = point_state_[corner_points_[v]];
+      if (state == kPointUnused) state = kPointWanted;
+    }
+  };
+
+  // The subset's receivers go on every list their faces allow, as after prepare().
+  for (const std::uint32_t i : subset) {
+    task_bits_[i] = kInSubset;
+    want_points(i);
+  }
+  transform_wanted();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subset.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) prepare_receiver(subset[k]);
+                    });
+
+  // Per task, the tiles the subset's receivers may cover.
+  const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry.resolution());
+  const double half = 0.5 * geometry.resolution();
+  const std::size_t capacity = clipped_capacity(std::max<std::size_t>(3, receivers.max_polygon_size()));
+  tbb::parallel_for(0, kFaceTasks, [&](int k) {
+    const FaceTask& task = tasks[static_cast<std::size_t>(k)];
+    TileMask& mask = masks_[static_cast<std::size_t>(k)];
+    mask.reset(task.x1 - task.x0, geometry.height(task.face));
+    const std::uint8_t need = task_mask(task, geometry.resolution());
+    std::vector<Vec3> local(capacity), scratch(capacity), clipped(capacity);
+    std::vector<Vec2> projected(capacity);
+    ProjectedBox box;
+    for (const std::uint32_t i : subset) {
+      if ((face_mask_[i] & need) != need) continue;
+      const std::size_t m = clip_to_face(local_polygon(i, local), task.face, outside_[i], scratch, clipped);
+      if (m != 0 && project_clipped(task.face, std::span<const Vec3>(clipped.data(), m), half, task.x0, projected, box))
+        mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
+    }
+  });
+
+  // Per patch that faces the shooter, the tasks whose tiles its ball may reach. The ball is widened by 1e-9 of
+  // (radius + distances from the origin of it and of the shooter): far more than the rounding of any point the
+  // hemicubes compute from the patch's points (transform, clipping), so they all lie inside.
+  const std::size_t patch_count = balls_.size();
+  const double shooter_reach = glm::length(shooter.centre);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, patch_count, 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      std::uint8_t bits = 0;
+      if (patch_first_[p] != patch_first_[p + 1] && culling_.faces(patch_receivers_[patch_first_[p]])) {
+        const PatchBall& ball = balls_[p];
+        const Vec3 d = ball.centre - shooter.centre;
+        const Vec3 local{glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), glm::dot(shooter.normal, d)};
+        const double radius = ball.radius + 1e-9 * (ball.radius + glm::length(ball.centre) + shooter_reach);
+        for (int k = 0; k < kFaceTasks; ++k) {
+          const FaceTask& task = tasks[static_cast<std::size_t>(k)];
+          const TileMask& mask = masks_[static_cast<std::size_t>(k)];
+          if (!mask.empty() &&
+              ball_may_cover(to_face(task.face, local), radius, task.face == HemicubeFace::kTop, half, task.x0, mask))
+            bits |= static_cast<std::uint8_t>(1u << k);
+        }
+      }
+      patch_bits_[p] = bits;
+    }
+  });
+
+  // Their receivers, and the points of those.
+  std::size_t prepared = subset.size();
+  for (std::size_t i = 0; i < count; ++i) {
+    if (task_bits_[i] != 0) continue;  // in the subset
+    task_bits_[i] = patch_bits_[patches[i]];
+    if (task_bits_[i] == 0) continue;
+    ++prepared;
+    want_points(i);
+  }
+  transform_wanted();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i)
+      if (task_bits_[i] != 0 && task_bits_[i] != kInSubset) prepare_receiver(i);
+  });
+  prepared_count_ = prepared;
+}
+
+void PreparedReceivers::task_receivers(int index, const FaceTask& task, int resolution,
+                                       std::vector<std::uint32_t>& out) const {
   const std::uint8_t need = task_mask(task, resolution);
   const std::size_t count = face_mask_.size();
   out.resize(count);
   std::size_t n = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    out[n] = static_cast<std::uint32_t>(i);
-    n += static_cast<std::size_t>((face_mask_[i] & need) == need);
+  if (subset_) {
+    const auto bit = static_cast<std::uint8_t>(1u << index);
+    for (std::size_t i = 0; i < count; ++i) {
+      out[n] = static_cast<std::uint32_t>(i);
+      n += static_cast<std::size_t>((face_mask_[i] & need) == need && (task_bits_[i] & bit) != 0);
+    }
+  } else {
+    for (std::size_t i = 0; i < count; ++i) {
+      out[n] = static_cast<std::uint32_t>(i);
+      n += static_cast<std::size_t>((face_mask_[i] & need) == need);
+    }
   }
   out.resize(n);
 }
-
 void TileMask::reset(int width, int height) {
   width_ = width;
   height_ = height;

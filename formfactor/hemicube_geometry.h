@@ -341,6 +341,19 @@ class PreparedReceivers {
  public:
   // Fills everything for `shooter` over all receivers (all occlude); parallel over receivers, deterministic.
   void prepare(const Shooter& shooter, const ReceiverView& receivers);
+  // The same for a shot into `subset` alone (backend.h), where a receiver outside the subset changes what the
+  // subset gets only if it covers a pixel that one of the subset's receivers may cover: the back ends skip every
+  // receiver whose projected box meets none of the subset's tiles (TileMask). Here whole patches are skipped before
+  // any of their points is transformed: the subset's receivers are prepared and their tiles marked per face task,
+  // then a patch's receivers are prepared only when a ball round them may project onto a marked tile of some task,
+  // and go only on the lists of those tasks (task_receivers). Every other receiver gets face mask 0. The back ends
+  // rasterize the same receivers as after prepare(), so the numbers are the same; a re-shot subset usually lies in
+  // a few parts of the hemicube, and most of the scene is never looked at. With sparse patch ids (BackFaceCulling)
+  // this is prepare().
+  void prepare_subset(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
+                      const HemicubeGeometry& geometry);
+  // How many receivers the last prepare or prepare_subset prepared.
+  std::size_t prepared_count() const { return prepared_count_; }
 
   // Receiver i's vertices in local coordinates, copied into `buffer` (room for its corners).
   std::span<const Vec3> local_polygon(std::size_t i, std::span<Vec3> buffer) const {
@@ -354,11 +367,22 @@ class PreparedReceivers {
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
-  // The receivers that may touch the task's columns (their face_mask has the task_mask), in order, into `out`: a
-  // pass without branches, so the task's loop does not mispredict on every other receiver.
-  void task_receivers(const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
+  // The receivers that may touch the columns of task `index` of face_tasks (their face_mask has the task_mask; after
+  // prepare_subset, only those it put on that task's list), in order, into `out`: a pass without branches, so the
+  // task's loop does not mispredict on every other receiver.
+  void task_receivers(int index, const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
 
  private:
+  // A ball holding every point of one patch's receivers (prepare_subset).
+  struct PatchBall {
+    Vec3 centre;
+    double radius;
+  };
+  void start(const Shooter& shooter, const ReceiverView& receivers);
+  // outside_[i] and face_mask_[i] from the outcodes of receiver i's points.
+  void prepare_receiver(std::size_t i);
+  // The receivers of every patch and their balls, found again when the view changed; false with sparse patch ids.
+  bool find_patch_balls(const ReceiverView& receivers);
   Shooter shooter_;
   std::span<const std::uint32_t> offsets_;
   std::span<const std::uint32_t> corner_points_;
@@ -368,6 +392,22 @@ class PreparedReceivers {
   std::vector<std::uint32_t> outside_;
   std::vector<std::uint8_t> face_mask_;
   BackFaceCulling culling_;
+  std::size_t prepared_count_ = 0;
+  // prepare_subset's state. task_bits_[i]: bit k when receiver i goes on task k's list; every bit for the subset's.
+  static constexpr std::uint8_t kInSubset = 0xff;
+  bool subset_ = false;
+  std::vector<std::uint8_t> task_bits_;
+  std::array<TileMask, kFaceTasks> masks_;
+  std::uint64_t balls_revision_ = 0;  // of the view the balls were found for (revisions start at 1)
+  std::size_t balls_size_ = 0;
+  bool balls_dense_ = false;
+  std::vector<PatchBall> balls_;                  // per patch id
+  std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
+  std::vector<std::uint32_t> patch_receivers_;
+  std::vector<std::uint8_t> patch_bits_;          // per patch id: the tasks its ball may reach
+  // Per point, in prepare_subset: not wanted, wanted, or transformed in this shot.
+  static constexpr std::uint8_t kPointUnused = 0, kPointWanted = 1, kPointDone = 2;
+  std::vector<std::uint8_t> point_state_;
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'

@@ -641,6 +641,65 @@ TEST(HemicubeAccuracy, SubsetGetsWhatTheWholeShotGives) {
   }
 }
 
+// room_with_block with every receiver cut into 3 x 3 pieces of its patch, the patch ids spread out by `stride`
+// (a stride past 16 receivers per id makes them sparse, and prepare_subset then prepares every receiver).
+ReceiverView room_with_block_cut(std::uint32_t stride) {
+  const ReceiverView coarse = room_with_block();
+  ReceiverView view;
+  for (std::uint32_t i = 0; i < coarse.size(); ++i) {
+    const std::span<const Vec3> q = coarse.polygon(i);
+    for (const Polygon& piece : grid(q[0], q[1] - q[0], q[3] - q[0], 3, 3))
+      view.add(piece, coarse.plane(i), coarse.surface(i), coarse.patch(i) * stride);
+  }
+  return view;
+}
+
+// prepare_subset prepares only the patches whose ball may reach a tile of the subset, and skips the rest before
+// transforming their points. The subset must get exactly what it gets with every receiver prepared (sparse patch
+// ids), for both hemicubes, from shooters that have patches on all sides, across face seams, and next to them
+// (a ball reaching behind the shooter's plane).
+TEST(HemicubeAccuracy, SubsetSkipsWholePatchesAndGetsTheSameNumbers) {
+  const ReceiverView dense = room_with_block_cut(1), sparse = room_with_block_cut(1000);
+  ASSERT_EQ(dense.size(), sparse.size());
+  std::vector<std::uint32_t> one_patch, block, every_seventh;
+  for (std::uint32_t i = 0; i < dense.size(); ++i) {
+    if (dense.patch(i) == dense.patch(100)) one_patch.push_back(i);
+    if (dense.surface(i) >= 6) block.push_back(i);
+    if (i % 7 == 3) every_seventh.push_back(i);
+  }
+  const std::vector<Shooter> shooters = {
+      rotated_shooter({0.31, 0.72, 0.4}, glm::normalize(Vec3(0.4, -0.3, -1.0)), 0.5),
+      rotated_shooter({0.15, 0.3, 0.1}, glm::normalize(Vec3(1.0, 1.0, 0.2)), 0.2),
+      rotated_shooter({0.45, 0.65, 0.9}, Vec3(0, 0, -1), 0.3),    // on the ceiling, above the block
+      rotated_shooter({0.45, 0.65, 0.3501}, Vec3(0, 0, 1), 0.7),  // just above the block's top
+      rotated_shooter({0.6001, 0.62, 0.2}, Vec3(1, 0, 0), 0.1),   // on a side of the block
+  };
+  std::size_t prepared = 0, offered = 0;
+  for (const char* name : {"aa-hemicube", "hemicube"}) {
+    for (int n : {50, 101}) {
+      auto with_balls = make_backend(name, {.resolution = n}), without = make_backend(name, {.resolution = n});
+      for (const Shooter& s : shooters) {
+        for (const auto* subset : {&one_patch, &block, &every_seventh}) {
+          std::vector<double> skipped(dense.size(), -1.0), all(dense.size(), -1.0);
+          with_balls->compute(s, dense, *subset, skipped);
+          without->compute(s, sparse, *subset, all);
+          for (const std::uint32_t i : *subset) EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
+          if (subset == &one_patch && std::string_view(name) == "hemicube") {
+            PreparedReceivers p;
+            p.prepare_subset(s, dense, *subset, HemicubeGeometry(n));
+            prepared += p.prepared_count();
+            offered += dense.size();
+            p.prepare_subset(s, sparse, *subset, HemicubeGeometry(n));
+            EXPECT_EQ(p.prepared_count(), sparse.size());
+          }
+        }
+      }
+    }
+  }
+  // The pieces of one wall patch lie in a small part of every hemicube here: most patches are skipped.
+  EXPECT_LT(prepared, offered / 2) << prepared << " of " << offered;
+}
+
 TEST(HemicubeAccuracy, SeparatedOccluderStillOccludes) {
   // A card floating 0.2 above a receiver hides part of it from the point below: their depth ranges in every
   // pixel are far apart, so the layer rule does not apply and the walk is the paper's E = A (1 - f).
