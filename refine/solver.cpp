@@ -30,6 +30,8 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
 
 namespace aarad::refine {
 namespace {
@@ -329,7 +331,8 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   }
   if (!kept) unoccluded_.clear();
   // A row whose leaves are all still leaves stays as it is.
-  if (subset.empty() && (row == nullptr || !shot.empty())) keep_row(shooter, candidates);
+  if (subset.empty() && row == nullptr) keep_row(shooter, candidates);
+  if (subset.empty() && row != nullptr && !shot.empty()) update_row(shooter, candidates);
   if (near_field) {
     near.unoccluded = unoccluded_;
     near_field_.apply(near, cache_.view(), subset, ff_);
@@ -346,15 +349,18 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
 // their pieces too. The near-field correction is then made as for a shot computed afresh.
 std::span<const std::uint32_t> Solver::factors_from_row(const FactorRow& row, bool unoccluded) {
   subset_.clear();
+  split_entries_.clear();
   for (std::size_t k = 0; k < row.nodes.size(); ++k) {
     const mesh::NodeId node = row.nodes[k];
-    if (hierarchy_.is_leaf(node)) {
-      ff_[cache_.receiver(node)] = row.factors[k];
+    const std::uint32_t receiver = cache_.receiver(node);  // kNoReceiver when it is no longer a leaf
+    if (receiver != kNoReceiver) {
+      ff_[receiver] = row.factors[k];
       continue;
     }
     // share_out_split_factors reads the factor the split leaf had from received_factor_; the next shot clears it.
     received_factor_[node] = row.factors[k];
     factor_written_.push_back(node);
+    split_entries_.push_back(k);
     for (mesh::NodeId leaf : hierarchy_.leaves_under(node)) subset_.push_back(cache_.receiver(leaf));
   }
   std::sort(subset_.begin(), subset_.end());
@@ -400,6 +406,71 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
       row.near_unoccluded.push_back(unoccluded_[i]);
     }
   }
+  factor_cache_.store(shooter, &hierarchy_.impl(), std::move(row));
+}
+
+// Rewriting the whole row, as keep_row does, cost as much as reading it in factors_from_row. The entries of the
+// leaves that stayed are what the shot gave them; each split leaf's entry gives way to its pieces that got a factor
+// (the first takes its place, the others fill entries none of whose pieces got one, then go at the end); entries left
+// empty are removed by moving the last entry into them. factors_from_row writes each entry to its own leaf, so their
+// order does not matter. The row grows to its exact size, as keep_row sizes it: the memory budget counts capacity.
+// A split leaf's pieces are near-field candidates exactly when it was one (candidates go by patch).
+void Solver::update_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
+  FactorRow row = factor_cache_.take(shooter);
+  const auto near = [&](std::uint32_t i) {
+    return ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
+  };
+  std::vector<std::size_t> vacant;
+  std::vector<std::pair<mesh::NodeId, double>> extra;
+  // Replaces entry k of (nodes, values), a split leaf's, by its pieces for which wanted(i); value(i) is their value.
+  const auto replace = [&](std::vector<mesh::NodeId>& nodes, std::vector<double>& values, std::size_t k,
+                           auto&& wanted, auto&& value) {
+    bool placed = false;
+    for (const mesh::NodeId leaf : hierarchy_.leaves_under(nodes[k])) {
+      const std::uint32_t i = cache_.receiver(leaf);
+      if (!wanted(i)) continue;
+      if (!placed) {
+        nodes[k] = leaf;
+        values[k] = value(i);
+        placed = true;
+      } else {
+        extra.emplace_back(leaf, value(i));
+      }
+    }
+    if (!placed) vacant.push_back(k);
+  };
+  // Fills the vacant entries with the extra ones, appends what is left of those, or removes the vacant entries left,
+  // largest index first (the last entry is then never a vacant one, or is the one removed).
+  const auto settle = [&](std::vector<mesh::NodeId>& nodes, std::vector<double>& values) {
+    for (; !vacant.empty() && !extra.empty(); vacant.pop_back(), extra.pop_back())
+      std::tie(nodes[vacant.back()], values[vacant.back()]) = extra.back();
+    if (nodes.capacity() < nodes.size() + extra.size()) {
+      nodes.reserve(nodes.size() + extra.size());
+      values.reserve(values.size() + extra.size());
+    }
+    for (const auto& [node, value] : extra) {
+      nodes.push_back(node);
+      values.push_back(value);
+    }
+    for (auto k = vacant.rbegin(); k != vacant.rend(); ++k) {
+      nodes[*k] = nodes.back();
+      values[*k] = values.back();
+      nodes.pop_back();
+      values.pop_back();
+    }
+    vacant.clear();
+    extra.clear();
+  };
+  for (const std::size_t k : split_entries_)
+    replace(row.nodes, row.factors, k, [&](std::uint32_t i) { return ff_[i] > 0.0; },
+            [&](std::uint32_t i) { return ff_[i]; });
+  settle(row.nodes, row.factors);
+  for (std::size_t k = 0; k < row.near_nodes.size(); ++k) {
+    if (cache_.receiver(row.near_nodes[k]) == kNoReceiver)
+      replace(row.near_nodes, row.near_unoccluded, k, near, [&](std::uint32_t i) { return unoccluded_[i]; });
+  }
+  settle(row.near_nodes, row.near_unoccluded);
+  row.node_count = hierarchy_.node_count();
   factor_cache_.store(shooter, &hierarchy_.impl(), std::move(row));
 }
 

@@ -175,6 +175,9 @@ class Solver {
   // Keeps the back end's factors of a whole shot (ff_, and unoccluded_ of the near-field candidates) as the
   // shooter's row.
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
+  // The same after a shot that reused the shooter's row, from that row: only the entries of the leaves split since
+  // (split_entries_) change.
+  void update_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
   const Material& material(mesh::NodeId node) const;
   void receive(mesh::NodeId leaf, const Rgb& incident, double sign);
   struct Deposit;
@@ -246,6 +249,7 @@ class Solver {
   std::vector<std::uint8_t> refused_;
   std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
   std::vector<std::uint32_t> subset_;
+  std::vector<std::size_t> split_entries_;  // factors_from_row: the row's entries of leaves split since
   // Per receiver: edge-neighbours (receiver indices).
   NeighbourTable neighbours_;
   // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it besides its
