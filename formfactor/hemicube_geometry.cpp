@@ -354,6 +354,23 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
       balls_[p] = PatchBall{centre, radius};
     }
   });
+  // Each cluster's ball holds its patches' balls (radius -1 when it has no receiver).
+  cluster_balls_.resize((patch_count + kClusterPatches - 1) / kClusterPatches);
+  for (std::size_t c = 0; c < cluster_balls_.size(); ++c) {
+    const std::size_t first = c * kClusterPatches, last = std::min(patch_count, first + kClusterPatches);
+    Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (std::size_t p = first; p < last; ++p) {
+      if (patch_first_[p] == patch_first_[p + 1]) continue;
+      lo = glm::min(lo, balls_[p].centre - balls_[p].radius);
+      hi = glm::max(hi, balls_[p].centre + balls_[p].radius);
+    }
+    PatchBall cluster{0.5 * (lo + hi), -1.0};
+    for (std::size_t p = first; p < last; ++p) {
+      if (patch_first_[p] != patch_first_[p + 1])
+        cluster.radius = std::max(cluster.radius, glm::length(balls_[p].centre - cluster.centre) + balls_[p].radius);
+    }
+    cluster_balls_[c] = cluster;
+  }
   return true;
 }
 
@@ -448,29 +465,39 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     }
   });
 
-  // Per patch that faces the shooter, the tasks whose tiles its ball may reach. The ball is widened by 1e-9 of
-  // (radius + distances from the origin of it and of the shooter): far more than the rounding of any point the
-  // hemicubes compute from the patch's points (transform, clipping), so they all lie inside.
-  const std::size_t patch_count = balls_.size();
+  // Per patch that faces the shooter, the tasks whose tiles its ball may reach, after those of its cluster's ball
+  // (a cluster that reaches no tile rules out all its patches at once). A ball is widened by 1e-9 of (radius +
+  // distances from the origin of it and of the shooter): far more than the rounding of any point the hemicubes
+  // compute from the patch's points (transform, clipping), so they all lie inside.
   const double shooter_reach = glm::length(shooter.centre);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, patch_count, 256),
+  const auto reach = [&](const PatchBall& ball, std::uint8_t tasks_to_test) {
+    const Vec3 d = ball.centre - shooter.centre;
+    const Vec3 local{glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), glm::dot(shooter.normal, d)};
+    const double radius = ball.radius + 1e-9 * (ball.radius + glm::length(ball.centre) + shooter_reach);
+    std::uint8_t bits = 0;
+    for (int k = 0; k < kFaceTasks; ++k) {
+      const FaceTask& task = tasks[static_cast<std::size_t>(k)];
+      if ((tasks_to_test >> k & 1u) != 0 &&
+          ball_may_cover(to_face(task.face, local), radius, task.face == HemicubeFace::kTop, half, task.x0,
+                         masks_[static_cast<std::size_t>(k)]))
+        bits |= static_cast<std::uint8_t>(1u << k);
+    }
+    return bits;
+  };
+  std::uint8_t marked = 0;  // the tasks with a marked tile
+  for (int k = 0; k < kFaceTasks; ++k)
+    if (!masks_[static_cast<std::size_t>(k)].empty()) marked |= static_cast<std::uint8_t>(1u << k);
+  const std::size_t patch_count = balls_.size();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_balls_.size(), 4),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t p = range.begin(); p != range.end(); ++p) {
-      std::uint8_t bits = 0;
-      if (patch_first_[p] != patch_first_[p + 1] && culling_.faces(patch_receivers_[patch_first_[p]])) {
-        const PatchBall& ball = balls_[p];
-        const Vec3 d = ball.centre - shooter.centre;
-        const Vec3 local{glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), glm::dot(shooter.normal, d)};
-        const double radius = ball.radius + 1e-9 * (ball.radius + glm::length(ball.centre) + shooter_reach);
-        for (int k = 0; k < kFaceTasks; ++k) {
-          const FaceTask& task = tasks[static_cast<std::size_t>(k)];
-          const TileMask& mask = masks_[static_cast<std::size_t>(k)];
-          if (!mask.empty() &&
-              ball_may_cover(to_face(task.face, local), radius, task.face == HemicubeFace::kTop, half, task.x0, mask))
-            bits |= static_cast<std::uint8_t>(1u << k);
-        }
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      const std::size_t first = c * kClusterPatches, last = std::min(patch_count, first + kClusterPatches);
+      const std::uint8_t cluster = cluster_balls_[c].radius >= 0.0 ? reach(cluster_balls_[c], marked) : 0;
+      for (std::size_t p = first; p < last; ++p) {
+        const bool tested = cluster != 0 && patch_first_[p] != patch_first_[p + 1] &&
+                            culling_.faces(patch_receivers_[patch_first_[p]]);
+        patch_bits_[p] = tested ? reach(balls_[p], cluster) : 0;
       }
-      patch_bits_[p] = bits;
     }
   });
 

@@ -402,6 +402,10 @@ class PreparedReceivers {
   std::size_t balls_size_ = 0;
   bool balls_dense_ = false;
   std::vector<PatchBall> balls_;                  // per patch id
+  // Patches kClusterPatches consecutive ids at a time (the solver numbers a surface's patches in rows), in a ball
+  // holding theirs: tested first.
+  static constexpr std::size_t kClusterPatches = 32;
+  std::vector<PatchBall> cluster_balls_;
   std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
   std::vector<std::uint32_t> patch_receivers_;
   std::vector<std::uint8_t> patch_bits_;          // per patch id: the tasks its ball may reach
