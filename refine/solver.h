@@ -212,6 +212,8 @@ class Solver {
   void update_luminance();
   // Rebuilds deposits_ when the receiver view changed.
   void update_deposits();
+  // Sets every receiver's slack_ to -infinity (to be tested) and drift_ to 0.
+  void forget_slack();
 
   const Scene& scene_;
   SolverOptions options_;
@@ -284,6 +286,12 @@ class Solver {
     return luminance_revision_ == cache_.revision() && luminance_source_ == &hierarchy_.impl();
   }
   std::vector<std::uint8_t> candidate_flag_;
+  // Per receiver r, for the gradient test of steep_leaves_of_shot: slack_[r] - drift_ is at most how far below the
+  // threshold the widest luminance step from r to a neighbour lies. Tested receivers set their slack; drift_ sums the
+  // largest luminance rise of each shot since the luminance table was made (which sets every slack to -infinity).
+  std::vector<double> slack_;
+  double drift_ = 0.0;
+  std::uint32_t drift_shots_ = 0;  // shots summed in drift_
 
   Rgb emitted_flux_{};
   Rgb absorbed_flux_{};
