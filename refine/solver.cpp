@@ -175,7 +175,8 @@ void Solver::initialise() {
   for (std::uint32_t surface = 0; surface < scene_.surfaces.size(); ++surface) {
     const Material& m = scene_.material_of_surface(surface);
     const Rgb& e = m.emission;
-    shading_.push_back({m.reflectance, e, !(positive_zero(e.r) && positive_zero(e.g) && positive_zero(e.b))});
+    shading_.push_back({m.reflectance, Rgb(1.0) - m.reflectance, e,
+                        !(positive_zero(e.r) && positive_zero(e.g) && positive_zero(e.b))});
   }
   received_factor_.assign(nodes, 0.0);
   // The near-field correction's table of patches, by patch id (the receivers' patch ids are the patches' nodes).
@@ -480,7 +481,7 @@ inline const Rgb& Solver::deposit(const Deposit& d, const SurfaceShading& shadin
   Rgb& b = radiosity[d.leaf];
   b += reflected * d.inverse_area;
   unshot[d.patch] += reflected * d.inverse_patch_area;
-  absorbed += (Rgb(1.0) - shading.reflectance) * incident * sign;
+  absorbed += shading.absorptance * incident * sign;
   return b;
 }
 
@@ -521,7 +522,7 @@ bool Solver::shoot(const PatchScan& scan) {
 
   hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
-  touched_.clear();
+  touched_count_ = 0;
   const std::span<const std::uint32_t> surfaces = cache_.view().surfaces();  // the leaves' surfaces
   update_deposits();
   // The luminance table of substructuring follows the deposits when it is current and no channel of the shot is
@@ -535,7 +536,9 @@ bool Solver::shoot(const PatchScan& scan) {
   // per receiver, each deposit reloaded every member and waited on the previous one's stores. The same additions
   // in the same order.
   const std::size_t count = cache_.size();
-  touched_.reserve(count);
+  if (touched_.size() < count) touched_.resize(count);  // only grows: no clearing per shot
+  std::uint32_t* touched = touched_.data();
+  std::size_t reached = 0;
   double* luminance = luminance_.data();
   const double* ff = ff_.data();
   const Deposit* deposits = deposits_.data();
@@ -552,7 +555,7 @@ bool Solver::shoot(const PatchScan& scan) {
     const Deposit& d = deposits[i];  // receive(leaf, incident, 1) without the lookups
     const SurfaceShading& s = shading[surface];
     const Rgb incident = shot_flux * ff[i];
-    touched_.push_back(static_cast<std::uint32_t>(i));
+    touched[reached++] = static_cast<std::uint32_t>(i);
     const Rgb& b = deposit(d, s, incident, 1.0, radiosity, unshot, absorbed);
     if (follow) {
       const double l = b.luminance();
@@ -561,6 +564,7 @@ bool Solver::shoot(const PatchScan& scan) {
       largest = std::max(largest, reflected_luminance(b, l, s));
     }
   }
+  touched_count_ = reached;
   if (follow) {
     drift_ += rise;
     ++drift_shots_;
@@ -657,7 +661,7 @@ std::vector<mesh::NodeId> Solver::steep_leaves_of_shot() {
   double* slack = slack_.data();
   const double drift = drift_;
   const double margin = 1e-9 * (threshold + drift) + std::numeric_limits<double>::min();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_.size(), 1024),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, touched_count_, 1024),
                     [luminance, flags, touched, threshold, &neighbours, slack, drift,
                      margin](const tbb::blocked_range<std::size_t>& range) {
                       const auto flag = [flags](std::uint32_t r) {
@@ -737,8 +741,8 @@ std::vector<mesh::NodeId> Solver::split_candidates(std::span<const mesh::NodeId>
 // Most shots split nothing (in the office, 215 of the first 3 000), and writing every receiver's factor by node in
 // the deposit loop, then clearing it, cost those shots a scattered store and a list entry per receiver.
 void Solver::record_shot_factors() {
-  factor_written_.reserve(factor_written_.size() + touched_.size());
-  for (const std::uint32_t receiver : touched_) {
+  factor_written_.reserve(factor_written_.size() + touched_count_);
+  for (const std::uint32_t receiver : std::span(touched_.data(), touched_count_)) {
     const mesh::NodeId leaf = cache_.leaf(receiver);
     received_factor_[leaf] = ff_[receiver];
     factor_written_.push_back(leaf);

@@ -249,7 +249,9 @@ class Solver {
   // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
   // shot after shot: the refusal is asked once instead of recomputing the children's areas every time.
   std::vector<std::uint8_t> refused_;
-  std::vector<std::uint32_t> touched_;          // receivers that got flux from the current shot
+  // The receivers that got flux from the current shot: the first touched_count_ entries (the vector only grows).
+  std::vector<std::uint32_t> touched_;
+  std::size_t touched_count_ = 0;
   std::vector<std::uint32_t> subset_;
   std::vector<std::size_t> split_entries_;  // factors_from_row: the row's entries of leaves split since
   // Per receiver: edge-neighbours (receiver indices).
@@ -269,6 +271,7 @@ class Solver {
   // E differs from +0 in some channel (when it does not, B - E is B bit for bit, and so is its luminance).
   struct SurfaceShading {
     Rgb reflectance;
+    Rgb absorptance;  // 1 - rho
     Rgb emission;
     bool emits = false;
   };
