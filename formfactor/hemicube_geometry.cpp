@@ -413,25 +413,28 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   const std::span<const std::uint32_t> patches = receivers.patches();
   std::fill(face_mask_.begin(), face_mask_.end(), std::uint8_t{0});
   task_bits_.assign(count, 0);
-  point_state_.assign(points.size(), kPointUnused);
-  // Transforms the points marked kPointWanted.
+  point_wanted_.assign(points.size(), 0);
+  // Lists receiver i's points that no receiver listed before it (wanted_points_), and transforms the listed ones.
+  wanted_points_.clear();
+  const auto want_points = [&](std::size_t i) {
+    for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
+      const std::uint32_t p = corner_points_[v];
+      if (point_wanted_[p] != 0) continue;
+      point_wanted_[p] = 1;
+      wanted_points_.push_back(p);
+    }
+  };
   const auto transform_wanted = [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 2048),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, wanted_points_.size(), 1024),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t p = range.begin(); p != range.end(); ++p) {
-                          if (point_state_[p] != kPointWanted) continue;
+                        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                          const std::uint32_t p = wanted_points_[k];
                           const Vec3 q = to_local(shooter, points[p]);
                           point_local_[p] = q;
                           point_code_[p] = frustum_outcode(q);
-                          point_state_[p] = kPointDone;
                         }
                       });
-  };
-  const auto want_points = [&](std::size_t i) {
-    for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
-      std::uint8_t& state = point_state_[corner_points_[v]];
-      if (state == kPointUnused) state = kPointWanted;
-    }
+    wanted_points_.clear();
   };
 
   // The subset's receivers go on every list their faces allow, as after prepare().
@@ -501,21 +504,25 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     }
   });
 
-  // Their receivers, and the points of those.
-  std::size_t prepared = subset.size();
-  for (std::size_t i = 0; i < count; ++i) {
-    if (task_bits_[i] != 0) continue;  // in the subset
-    task_bits_[i] = patch_bits_[patches[i]];
-    if (task_bits_[i] == 0) continue;
-    ++prepared;
-    want_points(i);
+  // Their receivers, and the points of those; every receiver on a list, in order (task_receivers).
+  listed_.clear();
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (task_bits_[i] == 0) {
+      task_bits_[i] = patch_bits_[patches[i]];
+      if (task_bits_[i] == 0) continue;
+      want_points(i);
+    }
+    listed_.push_back(i);
   }
   transform_wanted();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i)
-      if (task_bits_[i] != 0 && task_bits_[i] != kInSubset) prepare_receiver(i);
-  });
-  prepared_count_ = prepared;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, listed_.size(), 512),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        const std::uint32_t i = listed_[k];
+                        if (task_bits_[i] != kInSubset) prepare_receiver(i);
+                      }
+                    });
+  prepared_count_ = listed_.size();
 }
 
 void PreparedReceivers::task_receivers(int index, const FaceTask& task, int resolution,
@@ -526,8 +533,8 @@ void PreparedReceivers::task_receivers(int index, const FaceTask& task, int reso
   std::size_t n = 0;
   if (subset_) {
     const auto bit = static_cast<std::uint8_t>(1u << index);
-    for (std::size_t i = 0; i < count; ++i) {
-      out[n] = static_cast<std::uint32_t>(i);
+    for (const std::uint32_t i : listed_) {
+      out[n] = i;
       n += static_cast<std::size_t>((face_mask_[i] & need) == need && (task_bits_[i] & bit) != 0);
     }
   } else {

@@ -409,9 +409,9 @@ class PreparedReceivers {
   std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
   std::vector<std::uint32_t> patch_receivers_;
   std::vector<std::uint8_t> patch_bits_;          // per patch id: the tasks its ball may reach
-  // Per point, in prepare_subset: not wanted, wanted, or transformed in this shot.
-  static constexpr std::uint8_t kPointUnused = 0, kPointWanted = 1, kPointDone = 2;
-  std::vector<std::uint8_t> point_state_;
+  std::vector<std::uint8_t> point_wanted_;    // per point, in prepare_subset: 1 once a listed receiver has it
+  std::vector<std::uint32_t> wanted_points_;  // those points, until transformed
+  std::vector<std::uint32_t> listed_;         // the receivers prepare_subset may put on a list, in order
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
