@@ -437,15 +437,19 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     wanted_points_.clear();
   };
 
-  // The subset's receivers go on every list their faces allow, as after prepare().
+  // The subset's receivers go on every list their faces allow, as after prepare(); each prepared once (listed_),
+  // should the subset name one twice.
+  listed_.clear();
   for (const std::uint32_t i : subset) {
+    if (task_bits_[i] == kInSubset) continue;
     task_bits_[i] = kInSubset;
+    listed_.push_back(i);
     want_points(i);
   }
   transform_wanted();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subset.size(), 256),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, listed_.size(), 256),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t k = range.begin(); k != range.end(); ++k) prepare_receiver(subset[k]);
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) prepare_receiver(listed_[k]);
                     });
 
   // Per task, the tiles the subset's receivers may cover.
