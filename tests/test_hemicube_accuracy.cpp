@@ -683,7 +683,8 @@ TEST(HemicubeAccuracy, SubsetSkipsWholePatchesAndGetsTheSameNumbers) {
           std::vector<double> skipped(dense.size(), -1.0), all(dense.size(), -1.0);
           with_balls->compute(s, dense, *subset, skipped);
           without->compute(s, sparse, *subset, all);
-          for (const std::uint32_t i : *subset) EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
+          for (const std::uint32_t i : *subset)
+            EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
           if (subset == &one_patch && std::string_view(name) == "hemicube") {
             PreparedReceivers p;
             p.prepare_subset(s, dense, *subset, HemicubeGeometry(n));
