@@ -29,7 +29,7 @@ std::size_t AaHemicubeBackend::last_entries() const {
 }
 
 void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
-                                   std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b,
+                                   const TileMask* tiles, std::size_t max_vertices, FaceBuffers& b,
                                    std::span<double> sums, UnoccludedList& unoccluded) {
   const FaceTask& t = tasks_[static_cast<std::size_t>(task)];
   const HemicubeFace face = t.face;
@@ -66,25 +66,17 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       return 0;
     return m;
   };
-  // A re-shot subset: only the pixels its receivers may cover matter (TileMask).
-  const bool masked = !subset.empty();
-  if (masked) {
-    b.mask.reset(width, height);
-    const std::uint8_t need = task_mask(t, geometry_.resolution());
-    for (const std::uint32_t i : subset) {
-      if ((prepared_.face_mask(i) & need) == need && place(i) != 0)
-        b.mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
-    }
-    if (b.mask.empty()) {
-      task_entries_[static_cast<std::size_t>(task)] = 0;
-      return;
-    }
+  // A re-shot subset: only the pixels its receivers may cover matter.
+  const bool masked = tiles != nullptr;
+  if (masked && tiles->empty()) {
+    task_entries_[static_cast<std::size_t>(task)] = 0;
+    return;
   }
   b.arena.reset(width, height);
 
   for (const std::uint32_t i : candidates) {
     const std::size_t m = place(i);
-    if (m == 0 || (masked && !b.mask.overlaps(box.x_min, box.x_max, box.y_min, box.y_max))) continue;
+    if (m == 0 || (masked && !tiles->overlaps(box.x_min, box.x_max, box.y_min, box.y_max))) continue;
     InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const std::uint32_t receiver = i;
@@ -162,8 +154,8 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   sums_.start(tasks_, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int task) {
-    shoot_task(task, receivers, sums_.receivers(task), subset, max_vertices, buffers_.local(), sums_.sums(task),
-               task_unoccluded_[static_cast<std::size_t>(task)]);
+    shoot_task(task, receivers, sums_.receivers(task), subset.empty() ? nullptr : &prepared_.subset_tiles(task),
+               max_vertices, buffers_.local(), sums_.sums(task), task_unoccluded_[static_cast<std::size_t>(task)]);
   });
   sums_.combine(subset, out);
 }

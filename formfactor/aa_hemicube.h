@@ -59,12 +59,12 @@ class AaHemicubeBackend final : public FormFactorBackend {
     StagedCoverageArena arena;
     std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
     std::vector<Vec2> projected;
-    TileMask mask;  // a re-shot subset's pixels in the task
   };
-  // One task of a shot: every candidate, or with a non-empty subset only those that share pixels with it.
+  // One task of a shot: every candidate, or for a subset (`tiles`: PreparedReceivers::subset_tiles) only those
+  // whose box meets its tiles.
   void shoot_task(int task, const ReceiverView& receivers, std::span<const std::uint32_t> candidates,
-                  std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& buffers,
-                  std::span<double> sums, UnoccludedList& unoccluded);
+                  const TileMask* tiles, std::size_t max_vertices, FaceBuffers& buffers, std::span<double> sums,
+                  UnoccludedList& unoccluded);
 
   HemicubeGeometry geometry_;
   // Delta form factors of the top face [0] and of the side faces [1] in the arena's column-major order (pixel

@@ -14,7 +14,7 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
 void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
-                                 std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& b,
+                                 const TileMask* tiles, std::size_t max_vertices, FaceBuffers& b,
                                  std::span<double> sums, UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
@@ -41,23 +41,15 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint
       return 0;
     return m;
   };
-  // A re-shot subset: only the pixels its receivers may cover matter (TileMask, in the task's columns).
-  const bool masked = !subset.empty();
-  if (masked) {
-    b.mask.reset(width, height);
-    const std::uint8_t need = task_mask(task, geometry_.resolution());
-    for (const std::uint32_t i : subset) {
-      if ((prepared_.face_mask(i) & need) == need && place(i) != 0)
-        b.mask.add(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max);
-    }
-    if (b.mask.empty()) return;
-  }
+  // A re-shot subset: only the pixels its receivers may cover matter (tiles in the task's columns).
+  const bool masked = tiles != nullptr;
+  if (masked && tiles->empty()) return;
   b.inverse_depth.assign(pixels, 0.0);
   b.item.assign(pixels, kNoItem);
 
   for (const std::uint32_t i : candidates) {
     const std::size_t m = place(i);
-    if (m == 0 || (masked && !b.mask.overlaps(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max)))
+    if (m == 0 || (masked && !tiles->overlaps(box.x_min - task.x0, box.x_max - task.x0, box.y_min, box.y_max)))
       continue;
     const InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     const std::uint32_t item = i;
@@ -100,8 +92,9 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
   sums_.start(tasks, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int t) {
-    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), subset, max_vertices, buffers_.local(),
-               sums_.sums(t), task_unoccluded_[static_cast<std::size_t>(t)]);
+    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t),
+               subset.empty() ? nullptr : &prepared_.subset_tiles(t), max_vertices, buffers_.local(), sums_.sums(t),
+               task_unoccluded_[static_cast<std::size_t>(t)]);
   });
   sums_.combine(subset, out);
 }

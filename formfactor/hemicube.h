@@ -97,12 +97,12 @@ class HemicubeBackend final : public FormFactorBackend {
     std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
     std::vector<Vec2> projected;
     std::vector<ScanCrossing> crossings;
-    TileMask mask;  // a re-shot subset's pixels in the task
   };
-  // One task of a shot: every candidate, or with a non-empty subset only those that share pixels with it.
-  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
-                  std::span<const std::uint32_t> subset, std::size_t max_vertices, FaceBuffers& buffers,
-                  std::span<double> sums, UnoccludedList& unoccluded) const;
+  // One task of a shot: every candidate, or for a subset (`tiles`: PreparedReceivers::subset_tiles) only those
+  // whose box meets its tiles.
+  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates, const TileMask* tiles,
+                  std::size_t max_vertices, FaceBuffers& buffers, std::span<double> sums,
+                  UnoccludedList& unoccluded) const;
 
   HemicubeGeometry geometry_;
   PreparedReceivers prepared_;

@@ -295,11 +295,7 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
   // outcodes.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t p = range.begin(); p != range.end(); ++p) {
-                        const Vec3 q = to_local(shooter, points[p]);
-                        point_local_[p] = q;
-                        point_code_[p] = frustum_outcode(q);
-                      }
+                      for (std::size_t p = range.begin(); p != range.end(); ++p) prepare_point(p, points[p]);
                     });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, receivers.size(), 256),
                     [&](const tbb::blocked_range<std::size_t>& range) {
@@ -316,7 +312,7 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
   const std::span<const std::uint32_t> patches = receivers.patches();
   std::uint32_t max_patch = 0;
   for (const std::uint32_t p : patches) max_patch = std::max(max_patch, p);
-  balls_dense_ = count > 0 && max_patch <= 16 * count + 1024;  // as BackFaceCulling decides per patch
+  balls_dense_ = patch_ids_dense(max_patch, count);
   if (!balls_dense_) return false;
   // The receivers of each patch, in order (a counting sort by patch id).
   const std::size_t patch_count = std::size_t{max_patch} + 1;
@@ -400,10 +396,42 @@ bool ball_may_cover(const Vec3& centre, double radius, bool top, double half, do
 
 }  // namespace
 
+void PreparedReceivers::mark_subset_tiles(std::span<const std::uint32_t> subset, const HemicubeGeometry& geometry) {
+  // A clipped receiver's box as both hemicubes place it (project_clipped, moved left by the task's x0); those with
+  // nothing in the task's columns mark no tile.
+  const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry.resolution());
+  const double half = 0.5 * geometry.resolution();
+  std::size_t largest = 3;
+  for (const std::uint32_t i : subset) largest = std::max<std::size_t>(largest, offsets_[i + 1] - offsets_[i]);
+  const std::size_t capacity = clipped_capacity(largest);
+  tbb::parallel_for(0, kFaceTasks, [&](int k) {
+    const FaceTask& task = tasks[static_cast<std::size_t>(k)];
+    const int width = task.x1 - task.x0;
+    TileMask& mask = masks_[static_cast<std::size_t>(k)];
+    mask.reset(width, geometry.height(task.face));
+    const std::uint8_t need = task_mask(task, geometry.resolution());
+    std::vector<Vec3> local(capacity), scratch(capacity), clipped(capacity);
+    std::vector<Vec2> projected(capacity);
+    ProjectedBox box;
+    for (const std::uint32_t i : subset) {
+      if ((face_mask_[i] & need) != need) continue;
+      const std::size_t m = clip_to_face(local_polygon(i, local), task.face, outside_[i], scratch, clipped);
+      if (m != 0 && project_clipped(task.face, std::span<const Vec3>(clipped.data(), m), half, task.x0, projected, box) &&
+          box.x_max > 0.0 && box.x_min < width)
+        mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
+    }
+  });
+}
+
 void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverView& receivers,
                                        std::span<const std::uint32_t> subset, const HemicubeGeometry& geometry) {
-  if (subset.empty() || !find_patch_balls(receivers)) {
+  if (subset.empty()) {
     prepare(shooter, receivers);
+    return;
+  }
+  if (!find_patch_balls(receivers)) {  // sparse patch ids: every receiver prepared, and only the tiles marked
+    prepare(shooter, receivers);
+    mark_subset_tiles(subset, geometry);
     return;
   }
   start(shooter, receivers);
@@ -429,9 +457,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t k = range.begin(); k != range.end(); ++k) {
                           const std::uint32_t p = wanted_points_[k];
-                          const Vec3 q = to_local(shooter, points[p]);
-                          point_local_[p] = q;
-                          point_code_[p] = frustum_outcode(q);
+                          prepare_point(p, points[p]);
                         }
                       });
     wanted_points_.clear();
@@ -452,25 +478,9 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
                       for (std::size_t k = range.begin(); k != range.end(); ++k) prepare_receiver(listed_[k]);
                     });
 
-  // Per task, the tiles the subset's receivers may cover.
+  mark_subset_tiles(subset, geometry);
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry.resolution());
   const double half = 0.5 * geometry.resolution();
-  const std::size_t capacity = clipped_capacity(std::max<std::size_t>(3, receivers.max_polygon_size()));
-  tbb::parallel_for(0, kFaceTasks, [&](int k) {
-    const FaceTask& task = tasks[static_cast<std::size_t>(k)];
-    TileMask& mask = masks_[static_cast<std::size_t>(k)];
-    mask.reset(task.x1 - task.x0, geometry.height(task.face));
-    const std::uint8_t need = task_mask(task, geometry.resolution());
-    std::vector<Vec3> local(capacity), scratch(capacity), clipped(capacity);
-    std::vector<Vec2> projected(capacity);
-    ProjectedBox box;
-    for (const std::uint32_t i : subset) {
-      if ((face_mask_[i] & need) != need) continue;
-      const std::size_t m = clip_to_face(local_polygon(i, local), task.face, outside_[i], scratch, clipped);
-      if (m != 0 && project_clipped(task.face, std::span<const Vec3>(clipped.data(), m), half, task.x0, projected, box))
-        mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
-    }
-  });
 
   // Per patch that faces the shooter, the tasks whose tiles its ball may reach, after those of its cluster's ball
   // (a cluster that reaches no tile rules out all its patches at once). A ball is widened by 1e-9 of (radius +
@@ -594,7 +604,7 @@ void BackFaceCulling::find_deciders(const ReceiverView& receivers) {
   const std::span<const std::uint32_t> patches = receivers.patches();
   std::uint32_t max_patch = 0;
   for (const std::uint32_t p : patches) max_patch = std::max(max_patch, p);
-  per_patch_ = count > 0 && max_patch <= 16 * count + 1024;
+  per_patch_ = patch_ids_dense(max_patch, count);
   decider_patch_.clear();
   decider_receiver_.clear();
   patch_faces_.assign(per_patch_ ? static_cast<std::size_t>(max_patch) + 1 : 0, 0);

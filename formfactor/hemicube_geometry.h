@@ -133,9 +133,14 @@ inline Plane plane_to_local(const Shooter& shooter, const Plane& plane) {
 bool faces_point(const Plane& plane, const Vec3& centre);
 // Back-face culling per parent patch: receiver i faces a point when its patch does. A patch is decided once
 // (faces_point), on the plane of its first receiver (receivers are coplanar with their patch), so all its pieces are
-// culled together; sparse patch ids (larger than 16 x receivers + 1024) fall back to each receiver's own plane.
+// culled together; sparse patch ids (patch_ids_dense) fall back to each receiver's own plane.
 // Which receiver decides for each patch is kept between calls and found again only when the view changed
 // (ReceiverView::revision and size), so a shot decides its patches in parallel, with no pass over the receivers.
+// Whether patch ids up to `max_patch` over `receivers` receivers are few enough for tables by patch id: at most 16 x
+// receivers + 1024. BackFaceCulling decides per patch, and PreparedReceivers::prepare_subset skips by patch, only then.
+inline bool patch_ids_dense(std::uint32_t max_patch, std::size_t receivers) {
+  return receivers > 0 && max_patch <= 16 * receivers + 1024;
+}
 class BackFaceCulling {
  public:
   // Decides every patch (or receiver) for a shot from `centre`; parallel, the same for any thread count.
@@ -354,6 +359,10 @@ class PreparedReceivers {
                       const HemicubeGeometry& geometry);
   // How many receivers the last prepare or prepare_subset prepared.
   std::size_t prepared_count() const { return prepared_count_; }
+  // After prepare_subset: the tiles of task `index` of face_tasks that the subset's receivers may cover, in the
+  // task's pixel coordinates (columns counted from its x0). A receiver whose projected box meets none of them changes
+  // nothing the subset gets, and the back ends skip it.
+  const TileMask& subset_tiles(int index) const { return masks_[static_cast<std::size_t>(index)]; }
 
   // Receiver i's vertices in local coordinates, copied into `buffer` (room for its corners).
   std::span<const Vec3> local_polygon(std::size_t i, std::span<Vec3> buffer) const {
@@ -379,8 +388,16 @@ class PreparedReceivers {
     double radius;
   };
   void start(const Shooter& shooter, const ReceiverView& receivers);
+  // point_local_[p] and point_code_[p] of point p of the view, at `world`.
+  void prepare_point(std::size_t p, const Vec3& world) {
+    const Vec3 q = to_local(shooter_, world);
+    point_local_[p] = q;
+    point_code_[p] = frustum_outcode(q);
+  }
   // outside_[i] and face_mask_[i] from the outcodes of receiver i's points.
   void prepare_receiver(std::size_t i);
+  // masks_: per task, the tiles of the subset's receivers, which must be prepared.
+  void mark_subset_tiles(std::span<const std::uint32_t> subset, const HemicubeGeometry& geometry);
   // The receivers of every patch and their balls, found again when the view changed; false with sparse patch ids.
   bool find_patch_balls(const ReceiverView& receivers);
   Shooter shooter_;

@@ -368,19 +368,21 @@ std::span<const std::uint32_t> Solver::factors_from_row(const FactorRow& row, bo
   if (unoccluded) {
     unoccluded_.assign(ff_.size(), 0.0);
     for (std::size_t k = 0; k < row.near_nodes.size(); ++k) {
-      const mesh::NodeId node = row.near_nodes[k];
-      if (hierarchy_.is_leaf(node)) unoccluded_[cache_.receiver(node)] = row.near_unoccluded[k];
+      const std::uint32_t receiver = cache_.receiver(row.near_nodes[k]);
+      if (receiver != kNoReceiver) unoccluded_[receiver] = row.near_unoccluded[k];
     }
   }
   return subset_;
 }
 
+bool Solver::kept_near(std::uint32_t i, std::span<const std::uint8_t> candidates) const {
+  return ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
+}
+
 void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
   if (!factor_cache_.enabled()) return;
   // Sized exactly, in the memory of the patch's previous row when it had one.
-  const auto near = [&](std::uint32_t i) {
-    return ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
-  };
+  const auto near = [&](std::uint32_t i) { return kept_near(i, candidates); };
   std::size_t count = 0, near_count = 0;
   for (std::uint32_t i = 0; i < ff_.size(); ++i) {
     count += ff_[i] > 0.0;
@@ -418,9 +420,7 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
 // A split leaf's pieces are near-field candidates exactly when it was one (candidates go by patch).
 void Solver::update_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
   FactorRow row = factor_cache_.take(shooter);
-  const auto near = [&](std::uint32_t i) {
-    return ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
-  };
+  const auto near = [&](std::uint32_t i) { return kept_near(i, candidates); };
   std::vector<std::size_t> vacant;
   std::vector<std::pair<mesh::NodeId, double>> extra;
   // Replaces entry k of (nodes, values), a split leaf's, by its pieces for which wanted(i); value(i) is their value.

@@ -175,6 +175,9 @@ class Solver {
   // Keeps the back end's factors of a whole shot (ff_, and unoccluded_ of the near-field candidates) as the
   // shooter's row.
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
+  // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
+  // keeping those.
+  bool kept_near(std::uint32_t i, std::span<const std::uint8_t> candidates) const;
   // The same after a shot that reused the shooter's row, from that row: only the entries of the leaves split since
   // (split_entries_) change.
   void update_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
