@@ -416,7 +416,8 @@ void PreparedReceivers::mark_subset_tiles(std::span<const std::uint32_t> subset,
     for (const std::uint32_t i : subset) {
       if ((face_mask_[i] & need) != need) continue;
       const std::size_t m = clip_to_face(local_polygon(i, local), task.face, outside_[i], scratch, clipped);
-      if (m != 0 && project_clipped(task.face, std::span<const Vec3>(clipped.data(), m), half, task.x0, projected, box) &&
+      if (m != 0 &&
+          project_clipped(task.face, std::span<const Vec3>(clipped.data(), m), half, task.x0, projected, box) &&
           box.x_max > 0.0 && box.x_min < width)
         mask.add(box.x_min, box.x_max, box.y_min, box.y_max);
     }
