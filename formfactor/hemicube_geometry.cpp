@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -45,7 +46,8 @@ HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
   if (rule == DeltaRule::kExactCell) {
     std::vector<double> corner(static_cast<std::size_t>(n + 1) * (n + 1));
     for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) corner[static_cast<std::size_t>(j) * (n + 1) + i] = top_corner_form_factor(node(i), node(j));
+      for (int i = 0; i <= n; ++i)
+        corner[static_cast<std::size_t>(j) * (n + 1) + i] = top_corner_form_factor(node(i), node(j));
     for (int j = 0; j < n; ++j) {
       const double* lo = &corner[static_cast<std::size_t>(j) * (n + 1)];
       const double* hi = lo + (n + 1);
@@ -324,70 +326,145 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
     std::vector<std::uint32_t> next(patch_first_.begin(), patch_first_.end() - 1);
     for (std::uint32_t i = 0; i < count; ++i) patch_receivers_[next[patches[i]]++] = i;
   }
-  // Each ball is centred on the box of the patch's points, with the largest distance to them as radius
-  // (prepare_subset widens it for rounding).
-  balls_.resize(patch_count);
-  patch_bits_.resize(patch_count);
+  // The patches with receivers in their slots, grouped into clusters (group_patches); grouped again only when that
+  // set changed. The grouping decides how much a cluster's ball rules out, never a result, and a solver's patches
+  // stay where they are while their receivers split.
+  std::size_t with_receivers = 0;
+  for (std::size_t p = 0; p < patch_count; ++p) with_receivers += patch_first_[p] != patch_first_[p + 1] ? 1 : 0;
+  bool regroup = slot_patch_.size() != with_receivers;
+  for (std::size_t k = 0; k < slot_patch_.size() && !regroup; ++k) {
+    const std::uint32_t p = slot_patch_[k];
+    regroup = p >= patch_count || patch_first_[p] == patch_first_[p + 1];
+  }
   const std::span<const Vec3> points = receivers.points();
   const std::span<const std::uint32_t> offsets = receivers.offsets(), corners = receivers.corner_points();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, patch_count, 64),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t p = range.begin(); p != range.end(); ++p) {
-      Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-      const auto for_each_point = [&](auto&& body) {
-        for (std::uint32_t k = patch_first_[p]; k < patch_first_[p + 1]; ++k) {
-          const std::uint32_t i = patch_receivers_[k];
-          for (std::uint32_t v = offsets[i]; v < offsets[i + 1]; ++v) body(points[corners[v]]);
-        }
-      };
-      for_each_point([&](const Vec3& q) {
-        lo = glm::min(lo, q);
-        hi = glm::max(hi, q);
-      });
-      const Vec3 centre = 0.5 * (lo + hi);
+  // Calls body(q) for every point of patch p's receivers.
+  const auto for_each_point = [&](std::uint32_t p, auto&& body) {
+    for (std::uint32_t k = patch_first_[p]; k < patch_first_[p + 1]; ++k) {
+      const std::uint32_t i = patch_receivers_[k];
+      for (std::uint32_t v = offsets[i]; v < offsets[i + 1]; ++v) body(points[corners[v]]);
+    }
+  };
+  // The centre of the box of patch p's points.
+  const auto centre_of = [&](std::uint32_t p) {
+    Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for_each_point(p, [&](const Vec3& q) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    });
+    return 0.5 * (lo + hi);
+  };
+  if (regroup) {
+    std::vector<std::uint32_t> patches_with_receivers;
+    std::vector<Vec3> centres;
+    for (std::uint32_t p = 0; p < patch_count; ++p) {
+      if (patch_first_[p] == patch_first_[p + 1]) continue;
+      patches_with_receivers.push_back(p);
+      centres.push_back(centre_of(p));
+    }
+    group_patches(patches_with_receivers, centres);
+  }
+  // Per slot, the ball: centred on the box of the patch's points, with the largest distance to them as radius;
+  // and the box: two axes in the plane of the patch's first receiver and its normal, the extents of the points
+  // along them about the ball's centre, and a centre moved to their middle (prepare_subset widens both for
+  // rounding). In slot order, so that prepare_subset reads them in sequence.
+  const std::size_t slots = slot_patch_.size();
+  slot_balls_.resize(slots);
+  slot_boxes_.resize(slots);
+  slot_bits_.resize(slots);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 64), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      const std::uint32_t p = slot_patch_[k];
+      const Vec3 centre = centre_of(p);
       double radius = 0.0;
-      for_each_point([&](const Vec3& q) { radius = std::max(radius, glm::length(q - centre)); });
-      balls_[p] = PatchBall{centre, radius};
+      for_each_point(p, [&](const Vec3& q) { radius = std::max(radius, glm::length(q - centre)); });
+      slot_balls_[k] = PatchBall{centre, radius};
+      PatchBox& box = slot_boxes_[k];
+      const Vec3 n = receivers.plane(patch_receivers_[patch_first_[p]]).normal;
+      const Vec3 helper = std::abs(n.x) <= std::abs(n.y) && std::abs(n.x) <= std::abs(n.z) ? Vec3{1.0, 0.0, 0.0}
+                          : std::abs(n.y) <= std::abs(n.z)                             ? Vec3{0.0, 1.0, 0.0}
+                                                                                         : Vec3{0.0, 0.0, 1.0};
+      box.axes[0] = glm::normalize(glm::cross(n, helper));
+      box.axes[1] = glm::normalize(glm::cross(n, box.axes[0]));
+      box.axes[2] = glm::normalize(n);
+      Vec3 low(std::numeric_limits<double>::infinity()), high(-std::numeric_limits<double>::infinity());
+      for_each_point(p, [&](const Vec3& q) {
+        const Vec3 d = q - centre;
+        const Vec3 t{glm::dot(d, box.axes[0]), glm::dot(d, box.axes[1]), glm::dot(d, box.axes[2])};
+        low = glm::min(low, t);
+        high = glm::max(high, t);
+      });
+      const Vec3 middle = 0.5 * (low + high);
+      box.centre = centre + middle.x * box.axes[0] + middle.y * box.axes[1] + middle.z * box.axes[2];
+      box.half = 0.5 * (high - low);
     }
   });
-  // Each cluster's ball holds its patches' balls (radius -1 when it has no receiver).
-  cluster_balls_.resize((patch_count + kClusterPatches - 1) / kClusterPatches);
+  // Each cluster's ball holds its patches' balls.
+  cluster_balls_.resize((slots + kClusterPatches - 1) / kClusterPatches);
   for (std::size_t c = 0; c < cluster_balls_.size(); ++c) {
-    const std::size_t first = c * kClusterPatches, last = std::min(patch_count, first + kClusterPatches);
+    const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
     Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (std::size_t p = first; p < last; ++p) {
-      if (patch_first_[p] == patch_first_[p + 1]) continue;
-      lo = glm::min(lo, balls_[p].centre - balls_[p].radius);
-      hi = glm::max(hi, balls_[p].centre + balls_[p].radius);
+    for (std::size_t k = first; k < last; ++k) {
+      lo = glm::min(lo, slot_balls_[k].centre - slot_balls_[k].radius);
+      hi = glm::max(hi, slot_balls_[k].centre + slot_balls_[k].radius);
     }
-    PatchBall cluster{0.5 * (lo + hi), -1.0};
-    for (std::size_t p = first; p < last; ++p) {
-      if (patch_first_[p] != patch_first_[p + 1])
-        cluster.radius = std::max(cluster.radius, glm::length(balls_[p].centre - cluster.centre) + balls_[p].radius);
+    PatchBall cluster{0.5 * (lo + hi), 0.0};
+    for (std::size_t k = first; k < last; ++k) {
+      const PatchBall& ball = slot_balls_[k];
+      cluster.radius = std::max(cluster.radius, glm::length(ball.centre - cluster.centre) + ball.radius);
     }
     cluster_balls_[c] = cluster;
   }
   return true;
 }
 
+void PreparedReceivers::group_patches(std::span<const std::uint32_t> patches, std::span<const Vec3> centres) {
+  // The box of the centres, cut into 1024 steps a side; the patches in the order of their steps' Morton codes.
+  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const Vec3& c : centres) {
+    lo = glm::min(lo, c);
+    hi = glm::max(hi, c);
+  }
+  const Vec3 scale = 1023.0 / glm::max(hi - lo, Vec3(1e-300));
+  // Bits of a 10-bit step spread to every third place.
+  const auto spread = [](std::uint64_t x) {
+    std::uint64_t r = 0;
+    for (int b = 0; b < 10; ++b) r |= ((x >> b) & 1u) << (3 * b);
+    return r;
+  };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(patches.size());
+  for (std::size_t k = 0; k < patches.size(); ++k) {
+    const Vec3 step = glm::clamp((centres[k] - lo) * scale, Vec3(0.0), Vec3(1023.0));
+    const std::uint64_t key = spread(static_cast<std::uint64_t>(step.x)) |
+                              spread(static_cast<std::uint64_t>(step.y)) << 1 |
+                              spread(static_cast<std::uint64_t>(step.z)) << 2;
+    keyed[k] = {key, patches[k]};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  slot_patch_.resize(keyed.size());
+  for (std::size_t k = 0; k < keyed.size(); ++k) slot_patch_[k] = keyed[k].second;
+}
+
 namespace {
 
-// Whether a ball, its centre in the face coordinates of a task's face, may project onto a marked tile of the
-// task's mask (pixel coordinates as project_clipped's, moved left by `shift`). Over the ball, a lies in
-// [a0, a1] = centre.a -+ radius and l in [l - radius, l + radius], so l / a lies in the interval quotient; a
-// ball that reaches a <= 0 has no bound and may reach any tile. A margin of 1e-6 pixels covers the rounding.
-bool ball_may_cover(const Vec3& centre, double radius, bool top, double half, double shift, const TileMask& mask) {
-  const double a0 = centre.x - radius, a1 = centre.x + radius;
+// Whether a region, its centre in the face coordinates of a task's face, may project onto a marked tile of the
+// task's mask (pixel coordinates as project_clipped's, moved left by `shift`). Over the region each face
+// coordinate stays within `radius` of the centre's (the same radius thrice for a ball): a lies in
+// [a0, a1] = centre.a -+ radius.a and l in [l - radius.l, l + radius.l], so l / a lies in the interval quotient; a
+// region that reaches a <= 0 has no bound and may reach any tile. A margin of 1e-6 pixels covers the rounding.
+bool ball_may_cover(const Vec3& centre, const Vec3& radius, bool top, double half, double shift,
+                    const TileMask& mask) {
+  const double a0 = centre.x - radius.x, a1 = centre.x + radius.x;
   if (!(a1 > 0.0)) return false;  // wholly behind the face's apex: no point of it is in front of the face
   if (!(a0 > 0.0)) return true;
-  const auto quotient = [&](double l, double& lo, double& hi) {
-    const double l0 = l - radius, l1 = l + radius;
+  const auto quotient = [&](double l, double r, double& lo, double& hi) {
+    const double l0 = l - r, l1 = l + r;
     lo = l0 / (l0 >= 0.0 ? a1 : a0);
     hi = l1 / (l1 >= 0.0 ? a0 : a1);
   };
   double x0, x1, y0, y1;
-  quotient(centre.y, x0, x1);
-  quotient(centre.z, y0, y1);
+  quotient(centre.y, radius.y, x0, x1);
+  quotient(centre.z, radius.z, y0, y1);
   constexpr double kMargin = 1e-6;
   const double y_offset = top ? 1.0 : 0.0;
   return mask.overlaps((x0 + 1.0) * half - shift - kMargin, (x1 + 1.0) * half - shift + kMargin,
@@ -439,7 +516,6 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   subset_ = true;
   const std::size_t count = receivers.size();
   const std::span<const Vec3> points = receivers.points();
-  const std::span<const std::uint32_t> patches = receivers.patches();
   std::fill(face_mask_.begin(), face_mask_.end(), std::uint8_t{0});
   task_bits_.assign(count, 0);
   point_wanted_.assign(points.size(), 0);
@@ -483,8 +559,10 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry.resolution());
   const double half = 0.5 * geometry.resolution();
 
-  // Per patch that faces the shooter, the tasks whose tiles its ball may reach, after those of its cluster's ball
-  // (a cluster that reaches no tile rules out all its patches at once). A ball is widened by 1e-9 of (radius +
+  // Per patch that faces the shooter, the tasks whose tiles its ball and then its box may reach, after those of its
+  // cluster's ball (a cluster that reaches no tile rules out all its patches at once). A box, flat along its
+  // patch's normal, bounds a patch seen face on far more tightly than a ball: in the office it leaves 65 % of the
+  // receivers the balls listed. A ball's radius, and each half extent of a box, is widened by 1e-9 of (its size +
   // distances from the origin of it and of the shooter): far more than the rounding of any point the hemicubes
   // compute from the patch's points (transform, clipping), so they all lie inside.
   const double shooter_reach = glm::length(shooter.centre);
@@ -496,8 +574,27 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     for (int k = 0; k < kFaceTasks; ++k) {
       const FaceTask& task = tasks[static_cast<std::size_t>(k)];
       if ((tasks_to_test >> k & 1u) != 0 &&
-          ball_may_cover(to_face(task.face, local), radius, task.face == HemicubeFace::kTop, half, task.x0,
+          ball_may_cover(to_face(task.face, local), Vec3(radius), task.face == HemicubeFace::kTop, half, task.x0,
                          masks_[static_cast<std::size_t>(k)]))
+        bits |= static_cast<std::uint8_t>(1u << k);
+    }
+    return bits;
+  };
+  const auto box_reach = [&](const PatchBox& box, std::uint8_t tasks_to_test) {
+    const auto rotate = [&](const Vec3& v) {
+      return Vec3{glm::dot(shooter.tangent, v), glm::dot(shooter.bitangent, v), glm::dot(shooter.normal, v)};
+    };
+    const Vec3 local = rotate(box.centre - shooter.centre);
+    const double widen = 1e-9 * (glm::length(box.half) + glm::length(box.centre) + shooter_reach);
+    const Vec3 half_box = box.half + widen;
+    Vec3 extent(0.0);  // half the range of each local coordinate over the box
+    for (int k = 0; k < 3; ++k) extent += glm::abs(rotate(box.axes[k])) * half_box[k];
+    std::uint8_t bits = 0;
+    for (int k = 0; k < kFaceTasks; ++k) {
+      const FaceTask& task = tasks[static_cast<std::size_t>(k)];
+      if ((tasks_to_test >> k & 1u) != 0 &&
+          ball_may_cover(to_face(task.face, local), glm::abs(to_face(task.face, extent)),
+                         task.face == HemicubeFace::kTop, half, task.x0, masks_[static_cast<std::size_t>(k)]))
         bits |= static_cast<std::uint8_t>(1u << k);
     }
     return bits;
@@ -505,31 +602,43 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   std::uint8_t marked = 0;  // the tasks with a marked tile
   for (int k = 0; k < kFaceTasks; ++k)
     if (!masks_[static_cast<std::size_t>(k)].empty()) marked |= static_cast<std::uint8_t>(1u << k);
-  const std::size_t patch_count = balls_.size();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_balls_.size(), 4),
+  const std::size_t slots = slot_patch_.size();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_balls_.size(), 8),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
-      const std::size_t first = c * kClusterPatches, last = std::min(patch_count, first + kClusterPatches);
-      const std::uint8_t cluster = cluster_balls_[c].radius >= 0.0 ? reach(cluster_balls_[c], marked) : 0;
-      for (std::size_t p = first; p < last; ++p) {
-        const bool tested = cluster != 0 && patch_first_[p] != patch_first_[p + 1] &&
-                            culling_.faces(patch_receivers_[patch_first_[p]]);
-        patch_bits_[p] = tested ? reach(balls_[p], cluster) : 0;
+      const std::uint8_t cluster = reach(cluster_balls_[c], marked);
+      const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
+      for (std::size_t k = first; k < last; ++k) {
+        // The ball first (cheaper), then the box for the tasks the ball may reach.
+        const bool tested = cluster != 0 && culling_.patch_faces(slot_patch_[k]);
+        const std::uint8_t ball = tested ? reach(slot_balls_[k], cluster) : 0;
+        slot_bits_[k] = ball != 0 ? box_reach(slot_boxes_[k], ball) : 0;
       }
     }
   });
 
-  // Their receivers, and the points of those; every receiver on a list, in order (task_receivers).
-  listed_.clear();
-  for (std::uint32_t i = 0; i < count; ++i) {
-    if (task_bits_[i] == 0) {
-      task_bits_[i] = patch_bits_[patches[i]];
-      if (task_bits_[i] == 0) continue;
+  // Their receivers, and the points of those; every receiver on a list, in order (task_receivers). Found through
+  // the patches, marked in a bitmap of receivers and read back from it in order: a few thousand receivers of a
+  // scene of tens of thousands, without a pass over all of them.
+  listed_bits_.assign((count + 63) / 64, 0);
+  const auto mark_listed = [&](std::uint32_t i) { listed_bits_[i / 64] |= std::uint64_t{1} << (i % 64); };
+  for (const std::uint32_t i : listed_) mark_listed(i);
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    if (slot_bits_[slot] == 0) continue;
+    const std::uint32_t p = slot_patch_[slot];
+    for (std::uint32_t k = patch_first_[p]; k < patch_first_[p + 1]; ++k) {
+      const std::uint32_t i = patch_receivers_[k];
+      if (task_bits_[i] != 0) continue;  // in the subset
+      task_bits_[i] = slot_bits_[slot];
       want_points(i);
+      mark_listed(i);
     }
-    listed_.push_back(i);
   }
   transform_wanted();
+  listed_.clear();
+  for (std::size_t w = 0; w < listed_bits_.size(); ++w)
+    for (std::uint64_t bits = listed_bits_[w]; bits != 0; bits &= bits - 1)
+      listed_.push_back(static_cast<std::uint32_t>(w * 64 + static_cast<std::size_t>(std::countr_zero(bits))));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, listed_.size(), 512),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t k = range.begin(); k != range.end(); ++k) {

@@ -147,6 +147,8 @@ class BackFaceCulling {
   void decide(const Vec3& centre, const ReceiverView& receivers);
   // Whether receiver i of the view of the last decide() faces its centre.
   bool faces(std::size_t i) const { return per_patch_ ? patch_faces_[patches_[i]] != 0 : receiver_faces_[i] != 0; }
+  // Whether the receivers of patch p face the centre, when patches are decided (dense patch ids) and p has receivers.
+  bool patch_faces(std::uint32_t p) const { return patch_faces_[p] != 0; }
 
  private:
   void find_deciders(const ReceiverView& receivers);
@@ -350,11 +352,11 @@ class PreparedReceivers {
   // subset gets only if it covers a pixel that one of the subset's receivers may cover: the back ends skip every
   // receiver whose projected box meets none of the subset's tiles (TileMask). Here whole patches are skipped before
   // any of their points is transformed: the subset's receivers are prepared and their tiles marked per face task,
-  // then a patch's receivers are prepared only when a ball round them may project onto a marked tile of some task,
-  // and go only on the lists of those tasks (task_receivers). Every other receiver gets face mask 0. The back ends
-  // rasterize the same receivers as after prepare(), so the numbers are the same; a re-shot subset usually lies in
-  // a few parts of the hemicube, and most of the scene is never looked at. With sparse patch ids (BackFaceCulling)
-  // this is prepare().
+  // then a patch's receivers are prepared only when a ball and a box round them may project onto a marked tile of
+  // some task, and go only on the lists of those tasks (task_receivers). Every other receiver gets face mask 0. The
+  // back ends rasterize the same receivers as after prepare(), so the numbers are the same; a re-shot subset usually
+  // lies in a few parts of the hemicube, and most of the scene is never looked at. With sparse patch ids
+  // (BackFaceCulling) this is prepare().
   void prepare_subset(const Shooter& shooter, const ReceiverView& receivers, std::span<const std::uint32_t> subset,
                       const HemicubeGeometry& geometry);
   // How many receivers the last prepare or prepare_subset prepared.
@@ -418,17 +420,30 @@ class PreparedReceivers {
   std::uint64_t balls_revision_ = 0;  // of the view the balls were found for (revisions start at 1)
   std::size_t balls_size_ = 0;
   bool balls_dense_ = false;
-  std::vector<PatchBall> balls_;                  // per patch id
-  // Patches kClusterPatches consecutive ids at a time (the solver numbers a surface's patches in rows), in a ball
-  // holding theirs: tested first.
-  static constexpr std::size_t kClusterPatches = 32;
+  // A box holding every point of one patch's receivers: centre, axes (two in the patch's plane, then its normal)
+  // and half extents along them.
+  struct PatchBox {
+    Vec3 centre;
+    std::array<Vec3, 3> axes;
+    Vec3 half;
+  };
+  // The patches with receivers, one per slot, ordered so that kClusterPatches consecutive slots (a cluster) lie
+  // close together; per slot its ball, box and (in prepare_subset) the tasks it may reach. A cluster's ball, holding
+  // its patches' balls, is tested first.
+  static constexpr std::size_t kClusterPatches = 16;
+  // slot_patch_: `patches` in the order of their centres along a Morton curve.
+  void group_patches(std::span<const std::uint32_t> patches, std::span<const Vec3> centres);
+  std::vector<std::uint32_t> slot_patch_;
+  std::vector<PatchBall> slot_balls_;
+  std::vector<PatchBox> slot_boxes_;
+  std::vector<std::uint8_t> slot_bits_;
   std::vector<PatchBall> cluster_balls_;
   std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
   std::vector<std::uint32_t> patch_receivers_;
-  std::vector<std::uint8_t> patch_bits_;          // per patch id: the tasks its ball may reach
   std::vector<std::uint8_t> point_wanted_;    // per point, in prepare_subset: 1 once a listed receiver has it
   std::vector<std::uint32_t> wanted_points_;  // those points, until transformed
   std::vector<std::uint32_t> listed_;         // the receivers prepare_subset may put on a list, in order
+  std::vector<std::uint64_t> listed_bits_;    // bit i % 64 of word i / 64: receiver i is listed
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
