@@ -21,6 +21,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <atomic>
@@ -332,8 +333,19 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   }
   if (!kept) unoccluded_.clear();
   // A row whose leaves are all still leaves stays as it is.
-  if (subset.empty() && row == nullptr) keep_row(shooter, candidates);
-  if (subset.empty() && row != nullptr && !shot.empty()) update_row(shooter, candidates);
+  // The row is kept or patched on another thread, from a copy of the back end's factors, while this one applies the
+  // near-field correction and makes the deposits; shoot() waits for it before anything the row reads changes.
+  const bool keep = subset.empty() && row == nullptr, update = subset.empty() && row != nullptr && !shot.empty();
+  if ((keep || update) && factor_cache_.enabled()) {
+    row_ff_.assign(ff_.begin(), ff_.end());
+    row_task_->run([this, shooter, candidates, keep] {
+      if (keep) {
+        keep_row(shooter, candidates);
+      } else {
+        update_row(shooter, candidates);
+      }
+    });
+  }
   if (near_field) {
     near.unoccluded = unoccluded_;
     near_field_.apply(near, cache_.view(), subset, ff_);
@@ -376,7 +388,7 @@ std::span<const std::uint32_t> Solver::factors_from_row(const FactorRow& row, bo
 }
 
 bool Solver::kept_near(std::uint32_t i, std::span<const std::uint8_t> candidates) const {
-  return ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
+  return row_ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
 }
 
 void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
@@ -384,8 +396,8 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
   // Sized exactly, in the memory of the patch's previous row when it had one.
   const auto near = [&](std::uint32_t i) { return kept_near(i, candidates); };
   std::size_t count = 0, near_count = 0;
-  for (std::uint32_t i = 0; i < ff_.size(); ++i) {
-    count += ff_[i] > 0.0;
+  for (std::uint32_t i = 0; i < row_ff_.size(); ++i) {
+    count += row_ff_[i] > 0.0;
     near_count += near(i);
   }
   FactorRow row = factor_cache_.take(shooter);
@@ -399,10 +411,10 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
   size(row.factors, count);
   size(row.near_nodes, near_count);
   size(row.near_unoccluded, near_count);
-  for (std::uint32_t i = 0; i < ff_.size(); ++i) {
-    if (!(ff_[i] > 0.0)) continue;
+  for (std::uint32_t i = 0; i < row_ff_.size(); ++i) {
+    if (!(row_ff_[i] > 0.0)) continue;
     row.nodes.push_back(cache_.leaf(i));
-    row.factors.push_back(ff_[i]);
+    row.factors.push_back(row_ff_[i]);
     // The near-field correction reads the unoccluded factors of its candidates that got a factor.
     if (near(i)) {
       row.near_nodes.push_back(cache_.leaf(i));
@@ -463,8 +475,8 @@ void Solver::update_row(mesh::NodeId shooter, std::span<const std::uint8_t> cand
     extra.clear();
   };
   for (const std::size_t k : split_entries_)
-    replace(row.nodes, row.factors, k, [&](std::uint32_t i) { return ff_[i] > 0.0; },
-            [&](std::uint32_t i) { return ff_[i]; });
+    replace(row.nodes, row.factors, k, [&](std::uint32_t i) { return row_ff_[i] > 0.0; },
+            [&](std::uint32_t i) { return row_ff_[i]; });
   settle(row.nodes, row.factors);
   for (std::size_t k = 0; k < row.near_nodes.size(); ++k) {
     if (cache_.receiver(row.near_nodes[k]) == kNoReceiver)
@@ -518,6 +530,22 @@ bool Solver::shoot(const PatchScan& scan) {
   factor_written_.clear();
   received_factor_.resize(hierarchy_.node_count(), 0.0);
   ff_.assign(cache_.size(), 0.0);
+  // Waits for the row task of compute_form_factors, also when something throws.
+  struct RowWait {
+    tbb::task_group& group;
+    bool waited = false;
+    void wait() {
+      if (!waited) group.wait();
+      waited = true;
+    }
+    ~RowWait() {
+      if (waited) return;
+      try {  // unwinding from an exception of this thread, which is the one to report
+        group.wait();
+      } catch (...) {
+      }
+    }
+  } row_wait{*row_task_};
   compute_form_factors(shooter, {});
 
   hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
@@ -565,6 +593,7 @@ bool Solver::shoot(const PatchScan& scan) {
     }
   }
   touched_count_ = reached;
+  row_wait.wait();  // substructuring changes the leaves the row names
   if (follow) {
     drift_ += rise;
     ++drift_shots_;

@@ -16,6 +16,8 @@
 #include "refine/neighbour_table.h"
 #include "refine/receiver_cache.h"
 
+#include <tbb/task_group.h>
+
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -172,7 +174,7 @@ class Solver {
   // unoccluded ones into unoccluded_ when `unoccluded`), the factors of the leaves split since into
   // received_factor_, and their leaves now into subset_, which it returns.
   std::span<const std::uint32_t> factors_from_row(const FactorRow& row, bool unoccluded);
-  // Keeps the back end's factors of a whole shot (ff_, and unoccluded_ of the near-field candidates) as the
+  // Keeps the back end's factors of a whole shot (row_ff_, and unoccluded_ of the near-field candidates) as the
   // shooter's row.
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
   // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
@@ -292,6 +294,10 @@ class Solver {
     return luminance_revision_ == cache_.revision() && luminance_source_ == &hierarchy_.impl();
   }
   std::vector<std::uint8_t> candidate_flag_;
+  // The back end's factors of the current whole shot, for keep_row and update_row, which run on row_task_ while
+  // ff_ takes the near-field correction.
+  std::vector<double> row_ff_;
+  std::unique_ptr<tbb::task_group> row_task_ = std::make_unique<tbb::task_group>();
   // Per receiver r, for the gradient test of steep_leaves_of_shot: slack_[r] - drift_ is at most how far below the
   // threshold the widest luminance step from r to a neighbour lies. Tested receivers set their slack; drift_ sums the
   // largest luminance rise of each shot since the luminance table was made (which sets every slack to -infinity).
