@@ -338,6 +338,7 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   const bool keep = subset.empty() && row == nullptr, update = subset.empty() && row != nullptr && !shot.empty();
   if ((keep || update) && factor_cache_.enabled()) {
     row_ff_.assign(ff_.begin(), ff_.end());
+    row_pending_ = true;
     row_task_->run([this, shooter, candidates, keep] {
       if (keep) {
         keep_row(shooter, candidates);
@@ -530,22 +531,16 @@ bool Solver::shoot(const PatchScan& scan) {
   factor_written_.clear();
   received_factor_.resize(hierarchy_.node_count(), 0.0);
   ff_.assign(cache_.size(), 0.0);
-  // Waits for the row task of compute_form_factors, also when something throws.
+  // Waits for the row task of compute_form_factors when the shot ends, also when something throws.
   struct RowWait {
-    tbb::task_group& group;
-    bool waited = false;
-    void wait() {
-      if (!waited) group.wait();
-      waited = true;
-    }
+    Solver& solver;
     ~RowWait() {
-      if (waited) return;
       try {  // unwinding from an exception of this thread, which is the one to report
-        group.wait();
+        solver.wait_for_row();
       } catch (...) {
       }
     }
-  } row_wait{*row_task_};
+  } row_wait{*this};
   compute_form_factors(shooter, {});
 
   hierarchy_.unshot(shooter) = hierarchy_.unshot(shooter) * (1.0 - relaxation) - overshoot;
@@ -593,7 +588,6 @@ bool Solver::shoot(const PatchScan& scan) {
     }
   }
   touched_count_ = reached;
-  row_wait.wait();  // substructuring changes the leaves the row names
   if (follow) {
     drift_ += rise;
     ++drift_shots_;
@@ -604,7 +598,14 @@ bool Solver::shoot(const PatchScan& scan) {
   last_shooter_ = shooter;
 
   if (options_.adaptive) substructure(shooter, shot_flux);
+  wait_for_row();
   return true;
+}
+
+void Solver::wait_for_row() {
+  if (!row_pending_) return;
+  row_pending_ = false;
+  row_task_->wait();
 }
 
 void Solver::update_deposits() {
@@ -852,6 +853,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   bool first_round = true;
   while (!candidates.empty()) {
     const auto first_new = static_cast<mesh::NodeId>(hierarchy_.node_count());
+    wait_for_row();  // splitting changes the leaves the row names
     const std::vector<mesh::NodeId> split_nodes = split_candidates(candidates);
     if (split_nodes.empty()) break;
     // The shot's factors by leaf, while ff_ and the cache still hold the shot's receivers.

@@ -298,6 +298,9 @@ class Solver {
   // ff_ takes the near-field correction.
   std::vector<double> row_ff_;
   std::unique_ptr<tbb::task_group> row_task_ = std::make_unique<tbb::task_group>();
+  bool row_pending_ = false;
+  // Waits for the row task, if one runs: before anything it reads changes (the leaves, the factor cache).
+  void wait_for_row();
   // Per receiver r, for the gradient test of steep_leaves_of_shot: slack_[r] - drift_ is at most how far below the
   // threshold the widest luminance step from r to a neighbour lies. Tested receivers set their slack; drift_ sums the
   // largest luminance rise of each shot since the luminance table was made (which sets every slack to -infinity).
