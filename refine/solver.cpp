@@ -281,22 +281,33 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   }
   NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), points, weights, {}};
   const bool near_field = near_field_.reach() > 0.0;
+  // A whole shot from a patch whose last whole shot is kept shoots only into the leaves split since.
+  const FactorRow* row = subset.empty() ? factor_cache_.find(shooter, &hierarchy_.impl()) : nullptr;
   // With the near-field correction, the back end keeps the unoccluded factors of the receivers it may correct
-  // (taken into `into`, which is left empty when the back end has none).
-  const std::span<const std::uint8_t> candidates =
-      near_field ? near_field_.candidates(near, cache_.view()) : std::span<const std::uint8_t>{};
+  // (taken into `into`, which is left empty when the back end has none). A reused shot lists those candidates on a
+  // second thread while this one reads the row (with the row's unoccluded factors, dropped below when the back end
+  // keeps none).
+  std::span<const std::uint8_t> candidates;
+  const auto list_candidates = [&] { candidates = near_field_.candidates(near, cache_.view()); };
+  std::span<const std::uint32_t> shot = subset;
+  if (row != nullptr) {
+    if (near_field) row_task_->run(list_candidates);
+    try {
+      shot = factors_from_row(*row, near_field);
+    } catch (...) {
+      row_task_->wait();
+      throw;
+    }
+    row_task_->wait();
+    ++reused_shots_;
+  } else if (near_field) {
+    list_candidates();
+  }
   bool kept = near_field && backend_->keep_unoccluded(candidates);
   const auto take_unoccluded = [&](std::vector<double>& into) {
     into.assign(ff_.size(), 0.0);
     if (!backend_->add_unoccluded(into)) into.clear();
   };
-  // A whole shot from a patch whose last whole shot is kept shoots only into the leaves split since.
-  const FactorRow* row = subset.empty() ? factor_cache_.find(shooter, &hierarchy_.impl()) : nullptr;
-  std::span<const std::uint32_t> shot = subset;
-  if (row != nullptr) {
-    shot = factors_from_row(*row, kept);
-    ++reused_shots_;
-  }
   if (row == nullptr || !shot.empty()) {
     // The unoccluded factors of `shot`: into unoccluded_, or beside the row's there.
     std::vector<double>& shot_unoccluded = row != nullptr ? unoccluded_shot_ : unoccluded_;
