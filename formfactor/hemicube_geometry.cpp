@@ -397,6 +397,9 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
       const Vec3 middle = 0.5 * (low + high);
       box.centre = centre + middle.x * box.axes[0] + middle.y * box.axes[1] + middle.z * box.axes[2];
       box.half = 0.5 * (high - low);
+      const auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+      if (!finite(box.centre) || !finite(box.half))  // no normal to take (a degenerate plane): the ball's cube
+        box = PatchBox{centre, {Vec3{1.0, 0.0, 0.0}, Vec3{0.0, 1.0, 0.0}, Vec3{0.0, 0.0, 1.0}}, Vec3(radius)};
     }
   });
   // Each cluster's ball holds its patches' balls.

@@ -343,9 +343,9 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     if (row != nullptr) share_out_split_factors(static_cast<mesh::NodeId>(row->node_count));
   }
   if (!kept) unoccluded_.clear();
-  // A row whose leaves are all still leaves stays as it is.
-  // The row is kept or patched on another thread, from a copy of the back end's factors, while this one applies the
-  // near-field correction and makes the deposits; shoot() waits for it before anything the row reads changes.
+  // The row is kept, or patched where leaves split (a row whose leaves are all still leaves stays as it is), on
+  // another thread, from a copy of the back end's factors, while this one applies the near-field correction and
+  // makes the deposits; shoot() waits for it before anything the row reads changes.
   const bool keep = subset.empty() && row == nullptr, update = subset.empty() && row != nullptr && !shot.empty();
   if ((keep || update) && factor_cache_.enabled()) {
     row_ff_.assign(ff_.begin(), ff_.end());
