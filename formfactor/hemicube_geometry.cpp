@@ -569,29 +569,12 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   // distances from the origin of it and of the shooter): far more than the rounding of any point the hemicubes
   // compute from the patch's points (transform, clipping), so they all lie inside.
   const double shooter_reach = glm::length(shooter.centre);
-  const auto reach = [&](const PatchBall& ball, std::uint8_t tasks_to_test) {
-    const Vec3 d = ball.centre - shooter.centre;
-    const Vec3 local{glm::dot(shooter.tangent, d), glm::dot(shooter.bitangent, d), glm::dot(shooter.normal, d)};
-    const double radius = ball.radius + 1e-9 * (ball.radius + glm::length(ball.centre) + shooter_reach);
-    std::uint8_t bits = 0;
-    for (int k = 0; k < kFaceTasks; ++k) {
-      const FaceTask& task = tasks[static_cast<std::size_t>(k)];
-      if ((tasks_to_test >> k & 1u) != 0 &&
-          ball_may_cover(to_face(task.face, local), Vec3(radius), task.face == HemicubeFace::kTop, half, task.x0,
-                         masks_[static_cast<std::size_t>(k)]))
-        bits |= static_cast<std::uint8_t>(1u << k);
-    }
-    return bits;
+  const auto rotate = [&](const Vec3& v) {  // into the shooter's frame
+    return Vec3{glm::dot(shooter.tangent, v), glm::dot(shooter.bitangent, v), glm::dot(shooter.normal, v)};
   };
-  const auto box_reach = [&](const PatchBox& box, std::uint8_t tasks_to_test) {
-    const auto rotate = [&](const Vec3& v) {
-      return Vec3{glm::dot(shooter.tangent, v), glm::dot(shooter.bitangent, v), glm::dot(shooter.normal, v)};
-    };
-    const Vec3 local = rotate(box.centre - shooter.centre);
-    const double widen = 1e-9 * (glm::length(box.half) + glm::length(box.centre) + shooter_reach);
-    const Vec3 half_box = box.half + widen;
-    Vec3 extent(0.0);  // half the range of each local coordinate over the box
-    for (int k = 0; k < 3; ++k) extent += glm::abs(rotate(box.axes[k])) * half_box[k];
+  // Of `tasks_to_test`, the tasks whose tiles a region may reach: its centre `local` in the shooter's frame, and
+  // each local coordinate within `extent` of the centre's over it.
+  const auto region_reach = [&](const Vec3& local, const Vec3& extent, std::uint8_t tasks_to_test) {
     std::uint8_t bits = 0;
     for (int k = 0; k < kFaceTasks; ++k) {
       const FaceTask& task = tasks[static_cast<std::size_t>(k)];
@@ -601,6 +584,16 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
         bits |= static_cast<std::uint8_t>(1u << k);
     }
     return bits;
+  };
+  const auto reach = [&](const PatchBall& ball, std::uint8_t tasks_to_test) {
+    const double radius = ball.radius + 1e-9 * (ball.radius + glm::length(ball.centre) + shooter_reach);
+    return region_reach(rotate(ball.centre - shooter.centre), Vec3(radius), tasks_to_test);
+  };
+  const auto box_reach = [&](const PatchBox& box, std::uint8_t tasks_to_test) {
+    const Vec3 half_box = box.half + 1e-9 * (glm::length(box.half) + glm::length(box.centre) + shooter_reach);
+    Vec3 extent(0.0);
+    for (int k = 0; k < 3; ++k) extent += glm::abs(rotate(box.axes[k])) * half_box[k];
+    return region_reach(rotate(box.centre - shooter.centre), extent, tasks_to_test);
   };
   std::uint8_t marked = 0;  // the tasks with a marked tile
   for (int k = 0; k < kFaceTasks; ++k)
@@ -672,6 +665,7 @@ void PreparedReceivers::task_receivers(int index, const FaceTask& task, int reso
   }
   out.resize(n);
 }
+
 void TileMask::reset(int width, int height) {
   width_ = width;
   height_ = height;

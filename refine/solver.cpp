@@ -404,7 +404,6 @@ bool Solver::kept_near(std::uint32_t i, std::span<const std::uint8_t> candidates
 }
 
 void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
-  if (!factor_cache_.enabled()) return;
   // Sized exactly, in the memory of the patch's previous row when it had one.
   const auto near = [&](std::uint32_t i) { return kept_near(i, candidates); };
   std::size_t count = 0, near_count = 0;

@@ -175,7 +175,7 @@ class Solver {
   // received_factor_, and their leaves now into subset_, which it returns.
   std::span<const std::uint32_t> factors_from_row(const FactorRow& row, bool unoccluded);
   // Keeps the back end's factors of a whole shot (row_ff_, and unoccluded_ of the near-field candidates) as the
-  // shooter's row.
+  // shooter's row; called with the factor cache enabled.
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
   // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
   // keeping those.
@@ -295,7 +295,8 @@ class Solver {
   }
   std::vector<std::uint8_t> candidate_flag_;
   // The back end's factors of the current whole shot, for keep_row and update_row, which run on row_task_ while
-  // ff_ takes the near-field correction.
+  // ff_ takes the near-field correction. A reused shot also lists its near-field candidates on row_task_ while it
+  // reads its row (and waits for them there).
   std::vector<double> row_ff_;
   std::unique_ptr<tbb::task_group> row_task_ = std::make_unique<tbb::task_group>();
   bool row_pending_ = false;
