@@ -459,11 +459,18 @@ bool ball_may_cover(const Vec3& centre, const Vec3& radius, bool top, double hal
                     const TileMask& mask) {
   const double a0 = centre.x - radius.x, a1 = centre.x + radius.x;
   if (!(a1 > 0.0)) return false;  // wholly behind the face's apex: no point of it is in front of the face
-  if (!(a0 > 0.0)) return true;
   const auto quotient = [&](double l, double r, double& lo, double& hi) {
     const double l0 = l - r, l1 = l + r;
-    lo = l0 / (l0 >= 0.0 ? a1 : a0);
-    hi = l1 / (l1 >= 0.0 ? a0 : a1);
+    if (a0 > 0.0) {
+      lo = l0 / (l0 >= 0.0 ? a1 : a0);
+      hi = l1 / (l1 >= 0.0 ? a0 : a1);
+    } else {
+      // The region reaches the apex plane, where l / a is unbounded; but the hemicubes clip to the face's frustum,
+      // |l| <= a, so only its points with l / a in [-1, 1] land on the face, and with a <= a1 a coordinate that
+      // keeps one sign stays beyond l0 / a1 (or l1 / a1).
+      lo = l0 > 0.0 ? l0 / a1 : -1.0;
+      hi = l1 < 0.0 ? l1 / a1 : 1.0;
+    }
   };
   double x0, x1, y0, y1;
   quotient(centre.y, radius.y, x0, x1);

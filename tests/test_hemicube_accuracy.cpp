@@ -697,8 +697,10 @@ TEST(HemicubeAccuracy, SubsetSkipsWholePatchesAndGetsTheSameNumbers) {
       }
     }
   }
-  // The pieces of one wall patch lie in a small part of every hemicube here: most patches are skipped.
-  EXPECT_LT(prepared, offered / 2) << prepared << " of " << offered;
+  // The pieces of one wall patch lie in a small part of every hemicube here: most patches are skipped, also those
+  // reaching behind a face's apex plane (whose part on the face is bounded by the frustum: 1 467 of 7 290 receivers
+  // were prepared when such a patch was taken to reach every tile, 639 now).
+  EXPECT_LT(prepared, offered / 8) << prepared << " of " << offered;
 }
 
 TEST(HemicubeAccuracy, SeparatedOccluderStillOccludes) {
