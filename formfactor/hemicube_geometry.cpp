@@ -309,6 +309,9 @@ void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& rece
 bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
   const std::size_t count = receivers.size();
   if (balls_revision_ == receivers.revision() && balls_size_ == count) return balls_dense_;
+  // A refinement of the view the balls were found for keeps them (ReceiverView::mark_refinement_of): a patch's
+  // points stay in their convex hull, where the patch's ball and box hold them, and its extreme points stay.
+  const bool refined = balls_dense_ && receivers.refines() == balls_revision_;
   balls_revision_ = receivers.revision();
   balls_size_ = count;
   const std::span<const std::uint32_t> patches = receivers.patches();
@@ -336,6 +339,7 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
     const std::uint32_t p = slot_patch_[k];
     regroup = p >= patch_count || patch_first_[p] == patch_first_[p + 1];
   }
+  if (refined && !regroup) return true;
   const std::span<const Vec3> points = receivers.points();
   const std::span<const std::uint32_t> offsets = receivers.offsets(), corners = receivers.corner_points();
   // Calls body(q) for every point of patch p's receivers.

@@ -16,6 +16,7 @@ std::uint64_t ReceiverView::next_revision() {
 
 void ReceiverView::clear() {
   revision_ = next_revision();
+  refines_ = 0;
   vertices_.clear();
   offsets_.assign(1, 0);
   planes_.clear();

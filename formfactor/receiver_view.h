@@ -47,6 +47,13 @@ class ReceiverView {
   // filled differently share one (a copy keeps its original's). What is derived from a view and kept between shots
   // is keyed on it with size() (BackFaceCulling's deciding receivers, the near-field correction's lists).
   std::uint64_t revision() const { return revision_; }
+  // Says that this view refines the view of revision `revision`: every receiver of a patch lies in the convex hull
+  // of that patch's points there, and every patch that had receivers there has some here (the solver's views after
+  // splits: a leaf's pieces tile it, a hanging vertex lies on an edge). What a back end derived per patch from that
+  // view's points then still holds (PreparedReceivers' patch balls and boxes). clear() forgets it.
+  void mark_refinement_of(std::uint64_t revision) { refines_ = revision; }
+  // The revision this view refines, 0 when none.
+  std::uint64_t refines() const { return refines_; }
   // The most corners of any receiver (0 when empty).
   std::size_t max_polygon_size() const { return max_polygon_size_; }
   std::span<const Vec3> polygon(std::size_t i) const {
@@ -79,6 +86,7 @@ class ReceiverView {
   std::vector<std::uint32_t> point_of_key_;  // per caller key: index into points_, or kNoPoint
   std::size_t max_polygon_size_ = 0;
   std::uint64_t revision_ = next_revision();
+  std::uint64_t refines_ = 0;
   static constexpr std::uint32_t kNoPoint = 0xFFFFFFFFu;
   // A revision no view has had yet (thread-safe).
   static std::uint64_t next_revision();

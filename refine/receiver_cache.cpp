@@ -61,6 +61,7 @@ bool ReceiverCache::update_after_splits(const mesh::Hierarchy& hierarchy, const 
     next_.append_from(view_, first, last);
   }
   for (; i < leaves.size(); ++i) add_leaf(next_, hierarchy, leaves[i]);
+  next_.mark_refinement_of(view_.revision());
   return true;
 }
 

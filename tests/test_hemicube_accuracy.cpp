@@ -550,10 +550,10 @@ TEST(HemicubeAccuracy, ClosedBoxWhoseWallsMeetARoundingApartSumsToOne) {
 // convex pieces of one surface (as the Cornell box's floor), the block has a top and four sides, each its own
 // surface. Junctions of different surfaces now run through the middle of the hemisphere (block sides on the
 // floor, block edges), not only along the room's corners.
-ReceiverView room_with_block() {
+ReceiverView room_with_block(const Vec3& lo = Vec3(0.3, 0.5, 0.0)) {  // lo: the block's footprint corner
   ReceiverView view;
   const double w = 1.0, d = 1.3, h = 0.9;  // room [0, w] x [0, d] x [0, h]
-  const Vec3 lo(0.3, 0.5, 0.0), size(0.3, 0.3, 0.35);  // block footprint corner and size
+  const Vec3 size(0.3, 0.3, 0.35);         // block size
   const Vec3 ex(1, 0, 0), ey(0, 1, 0), ez(0, 0, 1);
   std::vector<Polygon> floor;
   for (const Polygon& piece : {rectangle({0, 0, 0}, lo.x * ex, d * ey),
@@ -576,10 +576,10 @@ ReceiverView room_with_block() {
   wall(grid(d * ey, w * ex, h * ez, 3, 3), 5);        // y = d, facing -y
   const Vec3 bx = size.x * ex, by = size.y * ey, bz = size.z * ez;
   wall(grid(lo + bz, bx, by, 2, 2), 6);               // block top, facing +z
-  wall(grid(lo, bz, by, 2, 2), 7);                    // x = 0.3, facing -x
-  wall(grid(lo + bx, by, bz, 2, 2), 8);               // x = 0.6, facing +x
-  wall(grid(lo, bx, bz, 2, 2), 9);                    // y = 0.5, facing -y
-  wall(grid(lo + by, bz, bx, 2, 2), 10);              // y = 0.8, facing +y
+  wall(grid(lo, bz, by, 2, 2), 7);                    // x = lo.x, facing -x
+  wall(grid(lo + bx, by, bz, 2, 2), 8);               // x = lo.x + 0.3, facing +x
+  wall(grid(lo, bx, bz, 2, 2), 9);                    // y = lo.y, facing -y
+  wall(grid(lo + by, bz, bx, 2, 2), 10);              // y = lo.y + 0.3, facing +y
   return view;
 }
 
@@ -641,14 +641,14 @@ TEST(HemicubeAccuracy, SubsetGetsWhatTheWholeShotGives) {
   }
 }
 
-// room_with_block with every receiver cut into 3 x 3 pieces of its patch, the patch ids spread out by `stride`
-// (a stride past 16 receivers per id makes them sparse, and prepare_subset then prepares every receiver).
-ReceiverView room_with_block_cut(std::uint32_t stride) {
-  const ReceiverView coarse = room_with_block();
+// room_with_block with every receiver cut into cuts x cuts pieces of its patch, the patch ids spread out by
+// `stride` (a stride past 16 receivers per id makes them sparse, and prepare_subset then prepares every receiver).
+ReceiverView room_with_block_cut(std::uint32_t stride, int cuts = 3, const Vec3& block = Vec3(0.3, 0.5, 0.0)) {
+  const ReceiverView coarse = room_with_block(block);
   ReceiverView view;
   for (std::uint32_t i = 0; i < coarse.size(); ++i) {
     const std::span<const Vec3> q = coarse.polygon(i);
-    for (const Polygon& piece : grid(q[0], q[1] - q[0], q[3] - q[0], 3, 3))
+    for (const Polygon& piece : grid(q[0], q[1] - q[0], q[3] - q[0], cuts, cuts))
       view.add(piece, coarse.plane(i), coarse.surface(i), coarse.patch(i) * stride);
   }
   return view;
@@ -701,6 +701,41 @@ TEST(HemicubeAccuracy, SubsetSkipsWholePatchesAndGetsTheSameNumbers) {
   // reaching behind a face's apex plane (whose part on the face is bounded by the frustum: 1 467 of 7 290 receivers
   // were prepared when such a patch was taken to reach every tile, 639 now).
   EXPECT_LT(prepared, offered / 8) << prepared << " of " << offered;
+}
+
+// A view marked as a refinement of the last one a back end saw (ReceiverView::mark_refinement_of: the solver's view
+// after splits) keeps that view's patch balls and boxes; its subsets must still get what a back end that found them
+// afresh gives. A view that is not marked, or marked as refining another view than the last one seen, has its balls
+// found again: here its block stands elsewhere, under patches with the same ids.
+TEST(HemicubeAccuracy, RefinedViewKeepsPatchBallsAndGetsTheSameNumbers) {
+  const ReceiverView coarse = room_with_block_cut(1, 3), moved = room_with_block_cut(1, 3, Vec3(0.55, 0.2, 0.0));
+  ReceiverView fine = room_with_block_cut(1, 6), fine_again = room_with_block_cut(1, 6);
+  fine.mark_refinement_of(coarse.revision());
+  fine_again.mark_refinement_of(coarse.revision());  // not of `moved`, the view seen just before it below
+  const std::vector<Shooter> shooters = {
+      rotated_shooter({0.31, 0.72, 0.4}, glm::normalize(Vec3(0.4, -0.3, -1.0)), 0.5),
+      rotated_shooter({0.15, 0.3, 0.1}, glm::normalize(Vec3(1.0, 1.0, 0.2)), 0.2),
+      rotated_shooter({0.45, 0.65, 0.9}, Vec3(0, 0, -1), 0.3),
+  };
+  // The floor's receivers: the block, listed through its patches' balls, hides part of the floor from every shooter.
+  const auto floor = [](const ReceiverView& view) {
+    std::vector<std::uint32_t> subset;
+    for (std::uint32_t i = 0; i < view.size(); ++i)
+      if (view.surface(i) == 0) subset.push_back(i);
+    return subset;
+  };
+  for (const char* name : {"aa-hemicube", "hemicube"}) {
+    for (const Shooter& s : shooters) {
+      auto kept = make_backend(name, {.resolution = 50});
+      for (const ReceiverView* view : std::array<const ReceiverView*, 4>{&coarse, &fine, &moved, &fine_again}) {
+        const std::vector<std::uint32_t> subset = floor(*view);
+        std::vector<double> with_kept(view->size(), -1.0), afresh(view->size(), -1.0);
+        kept->compute(s, *view, subset, with_kept);
+        make_backend(name, {.resolution = 50})->compute(s, *view, subset, afresh);
+        for (const std::uint32_t i : subset) EXPECT_EQ(with_kept[i], afresh[i]) << name << " receiver " << i;
+      }
+    }
+  }
 }
 
 TEST(HemicubeAccuracy, SeparatedOccluderStillOccludes) {

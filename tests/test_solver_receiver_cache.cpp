@@ -16,6 +16,7 @@
 
 #include <map>
 #include <random>
+#include <set>
 #include <tuple>
 
 namespace aarad::refine {
@@ -80,11 +81,38 @@ TEST(SolverReceiverCache, ViewAfterSplitsIsTheViewOfAFreshBuild) {
     std::mt19937_64 rng(balance ? 31 : 17);
     for (int round = 0; round < 12; ++round) {
       split_some(hierarchy, rng, 1 + round % 4);
+      const formfactor::ReceiverView before = cache.view();
       ASSERT_TRUE(cache.update(hierarchy));
       ReceiverCache fresh;
       fresh.update(hierarchy);
       expect_same_view(cache, fresh);
       if (HasFatalFailure()) return;
+      // Marked as a refinement of the view before (ReceiverView::mark_refinement_of), which it is: every point of a
+      // patch's receivers lies in the box of that patch's points before (the convex hull's box), and every patch
+      // keeps receivers. A fresh build is not marked.
+      EXPECT_EQ(cache.view().refines(), before.revision());
+      EXPECT_EQ(fresh.view().refines(), 0u);
+      std::map<std::uint32_t, std::pair<Vec3, Vec3>> box;  // per patch: lowest and highest point before
+      for (std::size_t i = 0; i < before.size(); ++i) {
+        auto [it, added] = box.try_emplace(before.patch(i), Vec3(1e300), Vec3(-1e300));
+        for (const Vec3& p : before.polygon(i)) {
+          it->second.first = glm::min(it->second.first, p);
+          it->second.second = glm::max(it->second.second, p);
+        }
+      }
+      std::set<std::uint32_t> patches;
+      for (std::size_t i = 0; i < cache.view().size(); ++i) {
+        const auto it = box.find(cache.view().patch(i));
+        ASSERT_NE(it, box.end()) << "receiver " << i;
+        patches.insert(it->first);
+        for (const Vec3& p : cache.view().polygon(i)) {
+          const Vec3 slack = 1e-12 * (glm::abs(it->second.first) + glm::abs(it->second.second) + Vec3(1.0));
+          EXPECT_TRUE(glm::all(glm::greaterThanEqual(p, it->second.first - slack)) &&
+                      glm::all(glm::lessThanEqual(p, it->second.second + slack)))
+              << "receiver " << i << " of patch " << it->first;
+        }
+      }
+      EXPECT_EQ(patches.size(), box.size());
     }
     EXPECT_EQ(cache.incremental_rebuilds(), 12u) << "balance " << balance;
     EXPECT_GT(cache.size(), hierarchy.initial_element_count());
@@ -163,6 +191,7 @@ TEST(SolverReceiverCache, AnotherHierarchyIsBuiltAfresh) {
   cache.update(first);
   cache.update(second);
   EXPECT_EQ(cache.incremental_rebuilds(), 0u);
+  EXPECT_EQ(cache.view().refines(), 0u);  // built afresh: a refinement of nothing
   ReceiverCache fresh;
   fresh.update(second);
   expect_same_view(cache, fresh);
