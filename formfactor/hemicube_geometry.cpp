@@ -254,7 +254,7 @@ std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face,
   return count;
 }
 
-void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receivers) {
+void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receivers, bool culling_when_asked) {
   const std::size_t count = receivers.size();
   const std::size_t points = receivers.points().size();
   shooter_ = shooter;
@@ -265,7 +265,11 @@ void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receiv
   point_code_.resize(points);
   outside_.resize(count);
   face_mask_.resize(count);
-  culling_.decide(shooter.centre, receivers);
+  if (culling_when_asked) {
+    culling_.decide_when_asked(shooter.centre, receivers);
+  } else {
+    culling_.decide(shooter.centre, receivers);
+  }
 }
 
 void PreparedReceivers::prepare_receiver(std::size_t i) {
@@ -526,7 +530,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     mark_subset_tiles(subset, geometry);
     return;
   }
-  start(shooter, receivers);
+  start(shooter, receivers, true);  // the few patches tested below are decided as they are
   subset_ = true;
   const std::size_t count = receivers.size();
   const std::span<const Vec3> points = receivers.points();
@@ -726,6 +730,7 @@ void BackFaceCulling::find_deciders(const ReceiverView& receivers) {
   decider_patch_.clear();
   decider_receiver_.clear();
   patch_faces_.assign(per_patch_ ? static_cast<std::size_t>(max_patch) + 1 : 0, 0);
+  patch_decider_.assign(patch_faces_.size(), 0);
   // In receiver order: a patch's first receiver decides, whatever the thread count. patch_faces_ marks the patches
   // seen while they are listed (decide() overwrites every listed entry).
   if (per_patch_) {
@@ -735,15 +740,30 @@ void BackFaceCulling::find_deciders(const ReceiverView& receivers) {
       seen = 1;
       decider_patch_.push_back(patches[i]);
       decider_receiver_.push_back(i);
+      patch_decider_[patches[i]] = i;
     }
   }
   revision_ = receivers.revision();
   size_ = count;
 }
 
+void BackFaceCulling::decide_when_asked(const Vec3& centre, const ReceiverView& receivers) {
+  if (receivers.revision() != revision_ || receivers.size() != size_) find_deciders(receivers);
+  if (!per_patch_) {
+    decide(centre, receivers);
+    return;
+  }
+  patches_ = receivers.patches();
+  planes_ = receivers.planes();
+  centre_ = centre;
+  std::fill(patch_faces_.begin(), patch_faces_.end(), kUndecided);
+}
+
 void BackFaceCulling::decide(const Vec3& centre, const ReceiverView& receivers) {
   if (receivers.revision() != revision_ || receivers.size() != size_) find_deciders(receivers);
   patches_ = receivers.patches();
+  planes_ = receivers.planes();
+  centre_ = centre;
   if (per_patch_) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, decider_patch_.size(), 512),
                       [&](const tbb::blocked_range<std::size_t>& range) {

@@ -36,6 +36,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -145,19 +146,35 @@ class BackFaceCulling {
  public:
   // Decides every patch (or receiver) for a shot from `centre`; parallel, the same for any thread count.
   void decide(const Vec3& centre, const ReceiverView& receivers);
+  // The same, except that with dense patch ids a patch is decided when first asked about (faces, patch_faces): a
+  // subset's shot asks about few of the patches. Those may then be asked from several threads at once (a decision
+  // depends on the patch and the centre only, so two threads deciding one patch store the same value).
+  void decide_when_asked(const Vec3& centre, const ReceiverView& receivers);
   // Whether receiver i of the view of the last decide() faces its centre.
-  bool faces(std::size_t i) const { return per_patch_ ? patch_faces_[patches_[i]] != 0 : receiver_faces_[i] != 0; }
+  bool faces(std::size_t i) const { return per_patch_ ? patch_faces(patches_[i]) : receiver_faces_[i] != 0; }
   // Whether the receivers of patch p face the centre, when patches are decided (dense patch ids) and p has receivers.
-  bool patch_faces(std::uint32_t p) const { return patch_faces_[p] != 0; }
+  bool patch_faces(std::uint32_t p) const {
+    std::uint8_t faces = std::atomic_ref<std::uint8_t>(patch_faces_[p]).load(std::memory_order_relaxed);
+    if (faces == kUndecided) [[unlikely]] {
+      faces = faces_point(planes_[patch_decider_[p]], centre_) ? 1 : 0;
+      std::atomic_ref<std::uint8_t>(patch_faces_[p]).store(faces, std::memory_order_relaxed);
+    }
+    return faces != 0;
+  }
 
  private:
+  static constexpr std::uint8_t kUndecided = 2;
   void find_deciders(const ReceiverView& receivers);
   std::uint64_t revision_ = 0;  // of the view the deciders were found for (revisions start at 1)
   std::size_t size_ = 0;
   bool per_patch_ = false;
   std::span<const std::uint32_t> patches_;
   std::vector<std::uint32_t> decider_patch_, decider_receiver_;  // per patch that has receivers: its first receiver
-  std::vector<std::uint8_t> patch_faces_;     // per patch id: 1 when it faces the centre
+  std::vector<std::uint32_t> patch_decider_;  // per patch id with receivers: its first receiver
+  std::span<const Plane> planes_;
+  Vec3 centre_{0.0};
+  // Per patch id: 1 when it faces the centre, 0 when not, kUndecided until asked after decide_when_asked().
+  mutable std::vector<std::uint8_t> patch_faces_;
   std::vector<std::uint8_t> receiver_faces_;  // per receiver, with sparse patch ids
 };
 
@@ -389,7 +406,8 @@ class PreparedReceivers {
     Vec3 centre;
     double radius;
   };
-  void start(const Shooter& shooter, const ReceiverView& receivers);
+  // Sets up a shot from `shooter`; back-face culling decides patches only when asked with `culling_when_asked`.
+  void start(const Shooter& shooter, const ReceiverView& receivers, bool culling_when_asked = false);
   // point_local_[p] and point_code_[p] of point p of the view, at `world`.
   void prepare_point(std::size_t p, const Vec3& world) {
     const Vec3 q = to_local(shooter_, world);

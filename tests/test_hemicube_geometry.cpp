@@ -178,6 +178,10 @@ TEST(HemicubeGeometry, BackFaceCullingIsExact) {
     culling.decide(Vec3(0), v);
     std::vector<bool> result;
     for (std::size_t i = 0; i < v.size(); ++i) result.push_back(culling.faces(i));
+    // Each patch decided when first asked gives the same, asked in reverse order (patch 0 first through its second
+    // piece, whose plane would not face the point: its first receiver still decides).
+    culling.decide_when_asked(Vec3(0), v);
+    for (std::size_t i = v.size(); i-- > 0;) EXPECT_EQ(culling.faces(i), result[i]) << "asked, receiver " << i;
     return result;
   };
   EXPECT_EQ(faces(view), (std::vector<bool>{true, false, false, true}));
