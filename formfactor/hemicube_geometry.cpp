@@ -334,7 +334,7 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
     for (std::uint32_t i = 0; i < count; ++i) patch_receivers_[next[patches[i]]++] = i;
   }
   // The patches with receivers in their slots, grouped into clusters (group_patches); grouped again only when that
-  // set changed. The grouping decides how much a cluster's ball rules out, never a result, and a solver's patches
+  // set changed. The grouping decides how much a cluster's box rules out, never a result, and a solver's patches
   // stay where they are while their receivers split.
   std::size_t with_receivers = 0;
   for (std::size_t p = 0; p < patch_count; ++p) with_receivers += patch_first_[p] != patch_first_[p + 1] ? 1 : 0;
@@ -410,21 +410,21 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
         box = PatchBox{centre, {Vec3{1.0, 0.0, 0.0}, Vec3{0.0, 1.0, 0.0}, Vec3{0.0, 0.0, 1.0}}, Vec3(radius)};
     }
   });
-  // Each cluster's ball holds its patches' balls.
-  cluster_balls_.resize((slots + kClusterPatches - 1) / kClusterPatches);
-  for (std::size_t c = 0; c < cluster_balls_.size(); ++c) {
+  // Each cluster's box, on the scene's axes, holds its patches' boxes: a cluster lying along one wall (most do) is
+  // flat, where a ball round it reached as far off the wall as along it.
+  cluster_boxes_.resize((slots + kClusterPatches - 1) / kClusterPatches);
+  for (std::size_t c = 0; c < cluster_boxes_.size(); ++c) {
     const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
     Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
     for (std::size_t k = first; k < last; ++k) {
-      lo = glm::min(lo, slot_balls_[k].centre - slot_balls_[k].radius);
-      hi = glm::max(hi, slot_balls_[k].centre + slot_balls_[k].radius);
+      const PatchBox& box = slot_boxes_[k];
+      Vec3 extent(0.0);
+      for (int a = 0; a < 3; ++a) extent += glm::abs(box.axes[static_cast<std::size_t>(a)]) * box.half[a];
+      lo = glm::min(lo, box.centre - extent);
+      hi = glm::max(hi, box.centre + extent);
     }
-    PatchBall cluster{0.5 * (lo + hi), 0.0};
-    for (std::size_t k = first; k < last; ++k) {
-      const PatchBall& ball = slot_balls_[k];
-      cluster.radius = std::max(cluster.radius, glm::length(ball.centre - cluster.centre) + ball.radius);
-    }
-    cluster_balls_[c] = cluster;
+    cluster_boxes_[c] = PatchBox{0.5 * (lo + hi), {Vec3{1.0, 0.0, 0.0}, Vec3{0.0, 1.0, 0.0}, Vec3{0.0, 0.0, 1.0}},
+                                 0.5 * (hi - lo)};
   }
   return true;
 }
@@ -578,7 +578,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   const double half = 0.5 * geometry.resolution();
 
   // Per patch that faces the shooter, the tasks whose tiles its ball and then its box may reach, after those of its
-  // cluster's ball (a cluster that reaches no tile rules out all its patches at once). A box, flat along its
+  // cluster's box (a cluster that reaches no tile rules out all its patches at once). A box, flat along its
   // patch's normal, bounds a patch seen face on far more tightly than a ball: in the office it leaves 65 % of the
   // receivers the balls listed. A ball's radius, and each half extent of a box, is widened by 1e-9 of (its size +
   // distances from the origin of it and of the shooter): far more than the rounding of any point the hemicubes
@@ -614,10 +614,10 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   for (int k = 0; k < kFaceTasks; ++k)
     if (!masks_[static_cast<std::size_t>(k)].empty()) marked |= static_cast<std::uint8_t>(1u << k);
   const std::size_t slots = slot_patch_.size();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_balls_.size(), 8),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_boxes_.size(), 8),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
-      const std::uint8_t cluster = reach(cluster_balls_[c], marked);
+      const std::uint8_t cluster = box_reach(cluster_boxes_[c], marked);
       const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
       for (std::size_t k = first; k < last; ++k) {
         // The ball first (cheaper), then the box for the tasks the ball may reach.
