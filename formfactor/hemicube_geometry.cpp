@@ -114,8 +114,13 @@ void run_face_tasks(const std::array<std::size_t, kFaceTasks>& loads, const std:
 
 void TaskSums::start(const std::array<FaceTask, kFaceTasks>& tasks, int resolution, const PreparedReceivers& prepared,
                      std::size_t receivers) {
-  if (!clean_ || sums_[0].size() != receivers)
-    for (std::vector<double>& sums : sums_) sums.assign(receivers, 0.0);
+  for (std::vector<double>& sums : sums_) {
+    if (!clean_) {
+      sums.assign(receivers, 0.0);
+    } else if (sums.size() != receivers) {
+      sums.resize(receivers, 0.0);  // every sum is zero already: only the new ones are set
+    }
+  }
   clean_ = false;
   tbb::parallel_for(0, kFaceTasks, [&](int k) {
     prepared.task_receivers(k, tasks[static_cast<std::size_t>(k)], resolution, receivers_[static_cast<std::size_t>(k)]);

@@ -483,7 +483,7 @@ void run_face_tasks(const std::array<std::size_t, kFaceTasks>& loads, const std:
 class TaskSums {
  public:
   // Lists every task's receivers (in parallel) and makes every task's sums zero and as long as the view (cleared in
-  // full only when the size changed, or when the last shot did not reach combine()).
+  // full only when the last shot did not reach combine(); a view of another size only sets the sums it adds).
   void start(const std::array<FaceTask, kFaceTasks>& tasks, int resolution, const PreparedReceivers& prepared,
              std::size_t receivers);
   std::span<double> sums(int task) { return sums_[static_cast<std::size_t>(task)]; }
