@@ -820,40 +820,44 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
 // laid on the floor of a closed room lost 6.2 % of the emitted flux in its lamp's four shots, a box standing on the
 // floor made 3.6e-6 out of nothing, stairs against a wall 3.5e-5 (tests SolverEnergy.*ThroughSplits).
 void Solver::share_out_split_factors(mesh::NodeId first_new) {
-  const auto ancestor_of = [&](mesh::NodeId leaf) {
-    mesh::NodeId ancestor = leaf;  // the node that was a leaf when the shot was received
+  if (subset_.empty()) return;
+  // Per piece, the split leaf it comes from: the node that was a leaf when the shot was received.
+  piece_ancestor_.resize(subset_.size());
+  for (std::size_t k = 0; k < subset_.size(); ++k) {
+    mesh::NodeId ancestor = cache_.leaf(subset_[k]);
     while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
-    return ancestor;
-  };
-  std::vector<mesh::NodeId> split;  // the split leaves with a piece in the subset
-  split.reserve(subset_.size());
-  for (std::uint32_t receiver : subset_) split.push_back(ancestor_of(cache_.leaf(receiver)));
-  if (split.empty()) return;
-  std::sort(split.begin(), split.end());
-  split.erase(std::unique(split.begin(), split.end()), split.end());
-  std::vector<double> total(split.size(), 0.0), area(split.size(), 0.0);
-  const auto slot = [&](mesh::NodeId ancestor) {
-    return static_cast<std::size_t>(std::lower_bound(split.begin(), split.end(), ancestor) - split.begin());
-  };
-  for (std::uint32_t receiver : subset_) {
-    const std::size_t k = slot(ancestor_of(cache_.leaf(receiver)));
-    total[k] += ff_[receiver];
-    area[k] += hierarchy_.area(cache_.leaf(receiver));
+    piece_ancestor_[k] = ancestor;
   }
-  for (std::uint32_t receiver : subset_) {
-    const mesh::NodeId ancestor = ancestor_of(cache_.leaf(receiver));
-    const std::size_t k = slot(ancestor);
-    if (total[k] > 0.0) {
-      ff_[receiver] *= received_factor_[ancestor] / total[k];
-    } else if (area[k] > 0.0) {
+  // Per split leaf, a slot holding its pieces' total factor and area, summed in the subset's order.
+  if (share_slot_.size() < hierarchy_.node_count()) share_slot_.resize(hierarchy_.node_count(), kNoSlot);
+  share_total_.clear();
+  share_area_.clear();
+  for (std::size_t k = 0; k < subset_.size(); ++k) {
+    std::uint32_t& slot = share_slot_[piece_ancestor_[k]];
+    if (slot == kNoSlot) {
+      slot = static_cast<std::uint32_t>(share_total_.size());
+      share_total_.push_back(0.0);
+      share_area_.push_back(0.0);
+    }
+    share_total_[slot] += ff_[subset_[k]];
+    share_area_[slot] += hierarchy_.area(cache_.leaf(subset_[k]));
+  }
+  for (std::size_t k = 0; k < subset_.size(); ++k) {
+    const std::uint32_t receiver = subset_[k];
+    const mesh::NodeId ancestor = piece_ancestor_[k];
+    const std::uint32_t slot = share_slot_[ancestor];
+    if (share_total_[slot] > 0.0) {
+      ff_[receiver] *= received_factor_[ancestor] / share_total_[slot];
+    } else if (share_area_[slot] > 0.0) {
       // The back end gave none of the pieces anything, though the leaf received: a wall whose plane runs through
       // the shooting point, standing on the shooting patch, is seen edge on, a rounding's sliver for the leaf and
       // nothing for its pieces, while the correction gave the leaf what the part of the patch in front of it
       // sends. The pieces share it by area; left out, it was lost from a closed room (1.3e-3 of the emitted flux
       // in one shot).
-      ff_[receiver] = received_factor_[ancestor] * hierarchy_.area(cache_.leaf(receiver)) / area[k];
+      ff_[receiver] = received_factor_[ancestor] * hierarchy_.area(cache_.leaf(receiver)) / share_area_[slot];
     }
   }
+  for (const mesh::NodeId ancestor : piece_ancestor_) share_slot_[ancestor] = kNoSlot;
 }
 
 void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {

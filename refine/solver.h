@@ -249,6 +249,12 @@ class Solver {
   // is the shot's flux times this factor. Only substructuring reads it, and only after a split: the shot's own
   // factors are copied in from ff_ then (record_shot_factors), not by every shot's deposit loop.
   std::vector<double> received_factor_;
+  // share_out_split_factors' work: per piece of the subset its split leaf; per node a split leaf's slot (kNoSlot
+  // between calls); per slot the pieces' total factor and area.
+  static constexpr std::uint32_t kNoSlot = 0xffffffffu;
+  std::vector<mesh::NodeId> piece_ancestor_;
+  std::vector<std::uint32_t> share_slot_;
+  std::vector<double> share_total_, share_area_;
   std::vector<mesh::NodeId> factor_written_;  // the nodes whose received_factor_ the current shot set
   // Per NodeId: 1 when the hierarchy refused to split the node (deepest level, smallest area, or already split).
   // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
