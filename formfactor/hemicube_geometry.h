@@ -150,7 +150,7 @@ class BackFaceCulling {
   // subset's shot asks about few of the patches. Those may then be asked from several threads at once (a decision
   // depends on the patch and the centre only, so two threads deciding one patch store the same value).
   void decide_when_asked(const Vec3& centre, const ReceiverView& receivers);
-  // Whether receiver i of the view of the last decide() faces its centre.
+  // Whether receiver i of the view of the last decide() or decide_when_asked() faces its centre.
   bool faces(std::size_t i) const { return per_patch_ ? patch_faces(patches_[i]) : receiver_faces_[i] != 0; }
   // Whether the receivers of patch p face the centre, when patches are decided (dense patch ids) and p has receivers.
   bool patch_faces(std::uint32_t p) const {
