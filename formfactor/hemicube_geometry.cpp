@@ -299,7 +299,7 @@ void PreparedReceivers::prepare_receiver(std::size_t i) {
 }
 
 void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
-  start(shooter, receivers);
+  start(shooter, receivers, true);  // every patch is asked about below, by its receivers, in parallel
   subset_ = false;
   const std::span<const Vec3> points = receivers.points();
   // Every point once (a vertex is a corner of up to four elements), then every receiver combines its corners'

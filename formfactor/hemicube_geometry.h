@@ -147,7 +147,8 @@ class BackFaceCulling {
   // Decides every patch (or receiver) for a shot from `centre`; parallel, the same for any thread count.
   void decide(const Vec3& centre, const ReceiverView& receivers);
   // The same, except that with dense patch ids a patch is decided when first asked about (faces, patch_faces): a
-  // subset's shot asks about few of the patches. Those may then be asked from several threads at once (a decision
+  // subset's shot asks about few of the patches, and a whole shot decides them in its parallel pass over the
+  // receivers instead of a pass of its own. Those may then be asked from several threads at once (a decision
   // depends on the patch and the centre only, so two threads deciding one patch store the same value).
   void decide_when_asked(const Vec3& centre, const ReceiverView& receivers);
   // Whether receiver i of the view of the last decide() or decide_when_asked() faces its centre.
