@@ -259,7 +259,7 @@ std::size_t clip_to_face(std::span<const Vec3> local_polygon, HemicubeFace face,
   return count;
 }
 
-void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receivers, bool culling_when_asked) {
+void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receivers) {
   const std::size_t count = receivers.size();
   const std::size_t points = receivers.points().size();
   shooter_ = shooter;
@@ -270,11 +270,9 @@ void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receiv
   point_code_.resize(points);
   outside_.resize(count);
   face_mask_.resize(count);
-  if (culling_when_asked) {
-    culling_.decide_when_asked(shooter.centre, receivers);
-  } else {
-    culling_.decide(shooter.centre, receivers);
-  }
+  // Each patch is decided when asked: by its receivers as prepare() prepares them, in parallel, or as
+  // prepare_subset() tests the few patches it looks at.
+  culling_.decide_when_asked(shooter.centre, receivers);
 }
 
 void PreparedReceivers::prepare_receiver(std::size_t i) {
@@ -299,7 +297,7 @@ void PreparedReceivers::prepare_receiver(std::size_t i) {
 }
 
 void PreparedReceivers::prepare(const Shooter& shooter, const ReceiverView& receivers) {
-  start(shooter, receivers, true);  // every patch is asked about below, by its receivers, in parallel
+  start(shooter, receivers);
   subset_ = false;
   const std::span<const Vec3> points = receivers.points();
   // Every point once (a vertex is a corner of up to four elements), then every receiver combines its corners'
@@ -466,8 +464,9 @@ namespace {
 // Whether a region, its centre in the face coordinates of a task's face, may project onto a marked tile of the
 // task's mask (pixel coordinates as project_clipped's, moved left by `shift`). Over the region each face
 // coordinate stays within `radius` of the centre's (the same radius thrice for a ball): a lies in
-// [a0, a1] = centre.a -+ radius.a and l in [l - radius.l, l + radius.l], so l / a lies in the interval quotient; a
-// region that reaches a <= 0 has no bound and may reach any tile. A margin of 1e-6 pixels covers the rounding.
+// [a0, a1] = centre.a -+ radius.a and l in [l - radius.l, l + radius.l], so l / a lies in the interval quotient; for
+// a region that reaches a <= 0 the face's frustum bounds it instead (below). A margin of 1e-6 pixels covers the
+// rounding.
 bool ball_may_cover(const Vec3& centre, const Vec3& radius, bool top, double half, double shift,
                     const TileMask& mask) {
   const double a0 = centre.x - radius.x, a1 = centre.x + radius.x;
@@ -535,7 +534,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     mark_subset_tiles(subset, geometry);
     return;
   }
-  start(shooter, receivers, true);  // the few patches tested below are decided as they are
+  start(shooter, receivers);
   subset_ = true;
   const std::size_t count = receivers.size();
   const std::span<const Vec3> points = receivers.points();

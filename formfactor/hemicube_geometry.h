@@ -407,8 +407,8 @@ class PreparedReceivers {
     Vec3 centre;
     double radius;
   };
-  // Sets up a shot from `shooter`; back-face culling decides patches only when asked with `culling_when_asked`.
-  void start(const Shooter& shooter, const ReceiverView& receivers, bool culling_when_asked = false);
+  // Sets up a shot from `shooter` (back-face culling decides each patch when first asked about).
+  void start(const Shooter& shooter, const ReceiverView& receivers);
   // point_local_[p] and point_code_[p] of point p of the view, at `world`.
   void prepare_point(std::size_t p, const Vec3& world) {
     const Vec3 q = to_local(shooter_, world);
