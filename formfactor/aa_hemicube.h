@@ -16,10 +16,10 @@
 // physical surface are grouped by surface id, not by comparing depths, so coplanar pieces never occlude each
 // other whatever rounding does to their planes.
 //
-// Parallel over six tasks: the top face cut into its left and right column halves, and the four side faces, so
-// that every task has as many pixels as a side face and two threads share the work evenly (one arena and one
-// rasterizer per thread, set to each task's viewport), started largest first (run_face_tasks). The per-task
-// partial sums are added in task order, so the numbers do not depend on the number of threads.
+// Parallel over twelve tasks of one size (face_tasks): the top face cut into four column quarters and each side
+// face into its two column halves, so that two threads share the work evenly (one arena and one rasterizer per
+// thread, set to each task's viewport), started largest first (run_face_tasks). The per-task partial sums are
+// added in task order, so the numbers do not depend on the number of threads.
 #pragma once
 
 #include "core/area_rasterizer.h"

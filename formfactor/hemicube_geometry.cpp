@@ -122,8 +122,8 @@ void TaskSums::start(const std::array<FaceTask, kFaceTasks>& tasks, int resoluti
     }
   }
   clean_ = false;
-  tbb::parallel_for(0, kFaceTasks, [&](int k) {
-    prepared.task_receivers(k, tasks[static_cast<std::size_t>(k)], resolution, receivers_[static_cast<std::size_t>(k)]);
+  tbb::parallel_for(0, kHemicubeFaces, [&](int face) {
+    prepared.task_receivers(static_cast<HemicubeFace>(face), tasks, resolution, receivers_);
   });
 }
 
@@ -287,12 +287,15 @@ void PreparedReceivers::prepare_receiver(std::size_t i) {
     any |= code;
   }
   outside_[i] = any;
-  std::uint8_t mask = 0;
+  FaceMask mask = 0;
   for (int f = 0; f < kHemicubeFaces; ++f) {
-    if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<std::uint8_t>(1u << f);
+    if ((all & face_outcode_mask(static_cast<HemicubeFace>(f))) == 0) mask |= static_cast<FaceMask>(1u << f);
   }
-  if ((any & kOutcodeUNotPositive) != 0) mask |= kMaskUNotPositive;
-  if ((any & kOutcodeUNotNegative) != 0) mask |= kMaskUNotNegative;
+  // The sides of the lines where tasks meet (task_mask) that some vertex reaches: outcode bits 20 to 27 are mask
+  // bits 5 to 12, in the same order.
+  static_assert(kOutcodeUNotPositive == 1u << 20 && kOutcodeNotLeftOfThreeQuarters == 1u << 27 &&
+                kMaskUNotPositive == 1u << 5 && kMaskNotLeftOfThreeQuarters == 1u << 12);
+  mask |= static_cast<FaceMask>(((any >> 20) & 0xffu) << 5);
   face_mask_[i] = mask;
 }
 
@@ -461,14 +464,16 @@ void PreparedReceivers::group_patches(std::span<const std::uint32_t> patches, st
 
 namespace {
 
-// Whether a region, its centre in the face coordinates of a task's face, may project onto a marked tile of the
-// task's mask (pixel coordinates as project_clipped's, moved left by `shift`). Over the region each face
-// coordinate stays within `radius` of the centre's (the same radius thrice for a ball): a lies in
-// [a0, a1] = centre.a -+ radius.a and l in [l - radius.l, l + radius.l], so l / a lies in the interval quotient; for
-// a region that reaches a <= 0 the face's frustum bounds it instead (below). A margin of 1e-6 pixels covers the
-// rounding.
-bool ball_may_cover(const Vec3& centre, const Vec3& radius, bool top, double half, double shift,
-                    const TileMask& mask) {
+// The pixels a region may project onto on one face: its centre in the face's coordinates, the box [x0, x1] x
+// [y0, y1] in the face's pixel coordinates (project_clipped's before a task's shift); false when the region lies
+// wholly behind the face's apex. Over the region each face coordinate stays within `radius` of the centre's (the
+// same radius thrice for a ball): a lies in [a0, a1] = centre.a -+ radius.a and l in [l - radius.l, l + radius.l],
+// so l / a lies in the interval quotient; for a region that reaches a <= 0 the face's frustum bounds it instead
+// (below). A margin of 1e-6 pixels covers the rounding.
+struct RegionPixels {
+  double x0, x1, y0, y1;
+};
+bool region_pixels(const Vec3& centre, const Vec3& radius, bool top, double half, RegionPixels& pixels) {
   const double a0 = centre.x - radius.x, a1 = centre.x + radius.x;
   if (!(a1 > 0.0)) return false;  // wholly behind the face's apex: no point of it is in front of the face
   const auto quotient = [&](double l, double r, double& lo, double& hi) {
@@ -489,8 +494,14 @@ bool ball_may_cover(const Vec3& centre, const Vec3& radius, bool top, double hal
   quotient(centre.z, radius.z, y0, y1);
   constexpr double kMargin = 1e-6;
   const double y_offset = top ? 1.0 : 0.0;
-  return mask.overlaps((x0 + 1.0) * half - shift - kMargin, (x1 + 1.0) * half - shift + kMargin,
-                       (y0 + y_offset) * half - kMargin, (y1 + y_offset) * half + kMargin);
+  pixels = {(x0 + 1.0) * half - kMargin, (x1 + 1.0) * half + kMargin, (y0 + y_offset) * half - kMargin,
+            (y1 + y_offset) * half + kMargin};
+  return true;
+}
+
+// Whether those pixels meet a marked tile of a task's mask (its columns counted from `shift`).
+bool pixels_may_cover(const RegionPixels& pixels, double shift, const TileMask& mask) {
+  return mask.overlaps(pixels.x0 - shift, pixels.x1 - shift, pixels.y0, pixels.y1);
 }
 
 }  // namespace
@@ -508,7 +519,7 @@ void PreparedReceivers::mark_subset_tiles(std::span<const std::uint32_t> subset,
     const int width = task.x1 - task.x0;
     TileMask& mask = masks_[static_cast<std::size_t>(k)];
     mask.reset(width, geometry.height(task.face));
-    const std::uint8_t need = task_mask(task, geometry.resolution());
+    const FaceMask need = task_mask(task, geometry.resolution());
     std::vector<Vec3> local(capacity), scratch(capacity), clipped(capacity);
     std::vector<Vec2> projected(capacity);
     ProjectedBox box;
@@ -538,7 +549,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   subset_ = true;
   const std::size_t count = receivers.size();
   const std::span<const Vec3> points = receivers.points();
-  std::fill(face_mask_.begin(), face_mask_.end(), std::uint8_t{0});
+  std::fill(face_mask_.begin(), face_mask_.end(), FaceMask{0});
   task_bits_.assign(count, 0);
   point_wanted_.assign(points.size(), 0);
   // Lists receiver i's points that no receiver listed before it (wanted_points_), and transforms the listed ones.
@@ -593,40 +604,49 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   };
   // Of `tasks_to_test`, the tasks whose tiles a region may reach: its centre `local` in the shooter's frame, and
   // each local coordinate within `extent` of the centre's over it.
-  const auto region_reach = [&](const Vec3& local, const Vec3& extent, std::uint8_t tasks_to_test) {
-    std::uint8_t bits = 0;
+  const auto region_reach = [&](const Vec3& local, const Vec3& extent, TaskSet tasks_to_test) {
+    TaskSet bits = 0;
+    // The region's pixels once per face (its tasks are consecutive in face_tasks), then each task's tiles.
+    RegionPixels pixels{};
+    bool on_face = false;
     for (int k = 0; k < kFaceTasks; ++k) {
       const FaceTask& task = tasks[static_cast<std::size_t>(k)];
-      if ((tasks_to_test >> k & 1u) != 0 &&
-          ball_may_cover(to_face(task.face, local), glm::abs(to_face(task.face, extent)),
-                         task.face == HemicubeFace::kTop, half, task.x0, masks_[static_cast<std::size_t>(k)]))
-        bits |= static_cast<std::uint8_t>(1u << k);
+      if (k == 0 || task.face != tasks[static_cast<std::size_t>(k - 1)].face) on_face = false;
+      if ((tasks_to_test >> k & 1u) == 0) continue;
+      if (!on_face) {
+        on_face = true;
+        if (!region_pixels(to_face(task.face, local), glm::abs(to_face(task.face, extent)),
+                           task.face == HemicubeFace::kTop, half, pixels))
+          pixels = {1.0, -1.0, 1.0, -1.0};  // behind the face: meets no tile
+      }
+      if (pixels_may_cover(pixels, task.x0, masks_[static_cast<std::size_t>(k)]))
+        bits |= static_cast<TaskSet>(1u << k);
     }
     return bits;
   };
-  const auto reach = [&](const PatchBall& ball, std::uint8_t tasks_to_test) {
+  const auto reach = [&](const PatchBall& ball, TaskSet tasks_to_test) {
     const double radius = ball.radius + 1e-9 * (ball.radius + glm::length(ball.centre) + shooter_reach);
     return region_reach(rotate(ball.centre - shooter.centre), Vec3(radius), tasks_to_test);
   };
-  const auto box_reach = [&](const PatchBox& box, std::uint8_t tasks_to_test) {
+  const auto box_reach = [&](const PatchBox& box, TaskSet tasks_to_test) {
     const Vec3 half_box = box.half + 1e-9 * (glm::length(box.half) + glm::length(box.centre) + shooter_reach);
     Vec3 extent(0.0);
     for (int k = 0; k < 3; ++k) extent += glm::abs(rotate(box.axes[k])) * half_box[k];
     return region_reach(rotate(box.centre - shooter.centre), extent, tasks_to_test);
   };
-  std::uint8_t marked = 0;  // the tasks with a marked tile
+  TaskSet marked = 0;  // the tasks with a marked tile
   for (int k = 0; k < kFaceTasks; ++k)
-    if (!masks_[static_cast<std::size_t>(k)].empty()) marked |= static_cast<std::uint8_t>(1u << k);
+    if (!masks_[static_cast<std::size_t>(k)].empty()) marked |= static_cast<TaskSet>(1u << k);
   const std::size_t slots = slot_patch_.size();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_boxes_.size(), 8),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
-      const std::uint8_t cluster = box_reach(cluster_boxes_[c], marked);
+      const TaskSet cluster = box_reach(cluster_boxes_[c], marked);
       const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
       for (std::size_t k = first; k < last; ++k) {
         // The ball first (cheaper), then the box for the tasks the ball may reach.
         const bool tested = cluster != 0 && culling_.patch_faces(slot_patch_[k]);
-        const std::uint8_t ball = tested ? reach(slot_balls_[k], cluster) : 0;
+        const TaskSet ball = tested ? reach(slot_balls_[k], cluster) : 0;
         slot_bits_[k] = ball != 0 ? box_reach(slot_boxes_[k], ball) : 0;
       }
     }
@@ -664,25 +684,55 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   prepared_count_ = listed_.size();
 }
 
-void PreparedReceivers::task_receivers(int index, const FaceTask& task, int resolution,
-                                       std::vector<std::uint32_t>& out) const {
-  const std::uint8_t need = task_mask(task, resolution);
-  const std::size_t count = face_mask_.size();
-  out.resize(count);
-  std::size_t n = 0;
-  if (subset_) {
-    const auto bit = static_cast<std::uint8_t>(1u << index);
-    for (const std::uint32_t i : listed_) {
-      out[n] = i;
-      n += static_cast<std::size_t>((face_mask_[i] & need) == need && (task_bits_[i] & bit) != 0);
-    }
-  } else {
-    for (std::size_t i = 0; i < count; ++i) {
-      out[n] = static_cast<std::uint32_t>(i);
-      n += static_cast<std::size_t>((face_mask_[i] & need) == need);
-    }
+void PreparedReceivers::task_receivers(HemicubeFace face, const std::array<FaceTask, kFaceTasks>& tasks,
+                                       int resolution,
+                                       std::array<std::vector<std::uint32_t>, kFaceTasks>& lists) const {
+  constexpr std::size_t kMost = 4;  // tasks on one face
+  std::array<std::size_t, kMost> index{};
+  std::array<FaceMask, kMost> need{};
+  std::array<TaskSet, kMost> bit{};
+  std::array<std::uint32_t*, kMost> out{};
+  std::array<std::size_t, kMost> n{};
+  std::size_t strips = 0;
+  const std::size_t count = subset_ ? listed_.size() : face_mask_.size();
+  for (std::size_t k = 0; k < tasks.size(); ++k) {
+    if (tasks[k].face != face) continue;
+    index[strips] = k;
+    need[strips] = task_mask(tasks[k], resolution);
+    bit[strips] = static_cast<TaskSet>(1u << k);
+    lists[k].resize(count);
+    out[strips] = lists[k].data();
+    ++strips;
   }
-  out.resize(n);
+  // The loop over the face's tasks unrolled (two or four of them).
+  const auto run = [&]<std::size_t kStrips>(std::integral_constant<std::size_t, kStrips>, auto receiver_at,
+                                            auto listed) {
+    for (std::size_t j = 0; j < count; ++j) {
+      const std::uint32_t i = receiver_at(j);
+      const FaceMask mask = face_mask_[i];
+      for (std::size_t t = 0; t < kStrips; ++t) {
+        out[t][n[t]] = i;
+        n[t] += static_cast<std::size_t>((mask & need[t]) == need[t] && listed(i, bit[t]));
+      }
+    }
+  };
+  const auto run_strips = [&](auto strip_count) {
+    if (subset_) {
+      run(strip_count, [&](std::size_t j) { return listed_[j]; },
+          [&](std::uint32_t i, TaskSet b) { return (task_bits_[i] & b) != 0; });
+    } else {
+      run(strip_count, [](std::size_t j) { return static_cast<std::uint32_t>(j); },
+          [](std::uint32_t, TaskSet) { return true; });
+    }
+  };
+  if (strips == 4) {
+    run_strips(std::integral_constant<std::size_t, 4>{});
+  } else if (strips == 2) {
+    run_strips(std::integral_constant<std::size_t, 2>{});
+  } else {
+    throw Error("face tasks: " + std::to_string(strips) + " tasks on one face");
+  }
+  for (std::size_t t = 0; t < strips; ++t) lists[index[t]].resize(n[t]);
 }
 
 void TileMask::reset(int width, int height) {

@@ -37,6 +37,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -182,6 +183,15 @@ class BackFaceCulling {
 inline constexpr std::uint32_t face_outcode_mask(HemicubeFace face) { return 0xFu << (4 * static_cast<int>(face)); }
 inline constexpr std::uint32_t kOutcodeUNotPositive = 1u << 20;  // !(u > 0)
 inline constexpr std::uint32_t kOutcodeUNotNegative = 1u << 21;  // !(u < 0)
+inline constexpr std::uint32_t kOutcodeVNotPositive = 1u << 22;  // !(v > 0)
+inline constexpr std::uint32_t kOutcodeVNotNegative = 1u << 23;  // !(v < 0)
+// The top face's quarter lines u = -w / 2 and u = w / 2 (columns N / 4 and 3 N / 4 for N divisible by 4), with a
+// margin of 1e-9 (|u| + |w|): a point not flagged lies beyond the line by far more than clipping's rounding moves
+// the points it makes on the edges from it (face_tasks).
+inline constexpr std::uint32_t kOutcodeNotRightOfQuarter = 1u << 24;       // !(2u + w > margin)
+inline constexpr std::uint32_t kOutcodeNotLeftOfQuarter = 1u << 25;        // !(2u + w < -margin)
+inline constexpr std::uint32_t kOutcodeNotRightOfThreeQuarters = 1u << 26;  // !(2u - w > margin)
+inline constexpr std::uint32_t kOutcodeNotLeftOfThreeQuarters = 1u << 27;   // !(2u - w < -margin)
 
 namespace detail {
 // The outcode bits that difference k of frustum_outcode's (w - u, w + u, w - v, w + v, u - v, u + v) sets when it
@@ -206,8 +216,9 @@ inline constexpr OutcodeTables kOutcodeTables{};
 }  // namespace detail
 
 // Outcodes of a local point: bit 4 f + k is set when the point is strictly outside plane k of face f
-// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). Two more
-// bits say on which side of u = 0 the point lies, where the top face's two column halves meet (task_mask).
+// (k = 0: a - l1 >= 0, 1: a + l1 >= 0, 2: a - l2 >= 0, 3: a + l2 >= 0 on the top, l2 >= 0 on a side). More bits
+// say on which side the point lies of the lines where face tasks meet: u = 0, v = 0 and the top face's quarter
+// lines (task_mask).
 inline std::uint32_t frustum_outcode(const Vec3& local) {
   // face_outcode of every face, written out on (u, v, w): the same differences as through to_face, so the same
   // exact signs, without the per-face shuffle (this runs for every mesh vertex in every shot). The twenty
@@ -227,8 +238,17 @@ inline std::uint32_t frustum_outcode(const Vec3& local) {
                             static_cast<unsigned>(c > 0.0) << 2 | static_cast<unsigned>(d > 0.0) << 3 |
                             static_cast<unsigned>(e > 0.0) << 4 | static_cast<unsigned>(f > 0.0) << 5;
   const std::uint32_t below = static_cast<std::uint32_t>(w < 0.0) * 0x88880u;  // bit 3 of every side face
-  const std::uint32_t halves = (static_cast<std::uint32_t>(!(u > 0.0)) * kOutcodeUNotPositive) |
-                               (static_cast<std::uint32_t>(!(u < 0.0)) * kOutcodeUNotNegative);
+  const double margin = 1e-9 * (std::abs(u) + std::abs(w)), quarter = 2.0 * u + w, three_quarters = 2.0 * u - w;
+  const std::uint32_t sides = static_cast<std::uint32_t>(!(u > 0.0)) |
+                              static_cast<std::uint32_t>(!(u < 0.0)) << 1 |
+                              static_cast<std::uint32_t>(!(v > 0.0)) << 2 |
+                              static_cast<std::uint32_t>(!(v < 0.0)) << 3 |
+                              static_cast<std::uint32_t>(!(quarter > margin)) << 4 |
+                              static_cast<std::uint32_t>(!(quarter < -margin)) << 5 |
+                              static_cast<std::uint32_t>(!(three_quarters > margin)) << 6 |
+                              static_cast<std::uint32_t>(!(three_quarters < -margin)) << 7;
+  static_assert(kOutcodeUNotPositive == 1u << 20 && kOutcodeNotLeftOfThreeQuarters == 1u << 27);
+  const std::uint32_t halves = sides << 20;  // kOutcodeUNotPositive to kOutcodeNotLeftOfThreeQuarters
   return below | halves | detail::kOutcodeTables.negative[negative] | detail::kOutcodeTables.positive[positive];
 }
 
@@ -308,35 +328,70 @@ inline InverseDepth inverse_depth(HemicubeFace face, const Plane& local_plane, d
   return r;
 }
 
-// Columns [x0, x1) of one face: the unit of parallel work of both hemicubes. The top face has twice the pixels of
-// a side face, so it is cut into its left and right column halves: six tasks of a side face's size, which two
-// threads share evenly (five faces did not: the top face alone took as long as the four sides).
+// Columns [x0, x1) of one face: the unit of parallel work of both hemicubes. Every face is cut into strips of a
+// quarter of the top face's pixels: the top face into four column quarters, each side face into its two column
+// halves. Twelve tasks of one size, which two threads share evenly even when most of a shot's receivers lie in one
+// face: a finely meshed floor seen from a wall fills one side face, and with six tasks of a side face's size the
+// largest took 46 % of an office shot's work on average (docs/benchmarks.md).
 struct FaceTask {
   HemicubeFace face;
   int x0, x1;
 };
-inline constexpr int kFaceTasks = kHemicubeFaces + 1;
+inline constexpr int kFaceTasks = 12;
 inline std::array<FaceTask, kFaceTasks> face_tasks(int resolution) {
-  const int n = resolution;
-  return {FaceTask{HemicubeFace::kTop, 0, n / 2}, FaceTask{HemicubeFace::kTop, n / 2, n},
-          FaceTask{HemicubeFace::kPosU, 0, n},    FaceTask{HemicubeFace::kNegU, 0, n},
-          FaceTask{HemicubeFace::kPosV, 0, n},    FaceTask{HemicubeFace::kNegV, 0, n}};
+  const int n = resolution, h = n / 2, q = n / 4;
+  std::array<FaceTask, kFaceTasks> tasks{FaceTask{HemicubeFace::kTop, 0, q}, FaceTask{HemicubeFace::kTop, q, h},
+                                         FaceTask{HemicubeFace::kTop, h, h + q},
+                                         FaceTask{HemicubeFace::kTop, h + q, n}};
+  std::size_t k = 4;
+  for (const HemicubeFace face :
+       {HemicubeFace::kPosU, HemicubeFace::kNegU, HemicubeFace::kPosV, HemicubeFace::kNegV}) {
+    tasks[k++] = FaceTask{face, 0, h};
+    tasks[k++] = FaceTask{face, h, n};
+  }
+  return tasks;
 }
+// A set of face tasks: bit k for task k of face_tasks.
+using TaskSet = std::uint16_t;
+static_assert(kFaceTasks <= 16);
 
-// Bits of PreparedReceivers::face_mask after the five faces': some vertex of the receiver has u <= 0, or u >= 0
-// (from the outcodes' kOutcodeUNotPositive and kOutcodeUNotNegative).
-inline constexpr std::uint8_t kMaskUNotPositive = 1u << 5;
-inline constexpr std::uint8_t kMaskUNotNegative = 1u << 6;
-// The bits a receiver's face_mask needs, all of them, to cover part of the task's columns: its face, and on the top
-// face the side of u = 0 of the task's half: a cheap test before clipping. The top face's column
-// x = (u / w + 1) N / 2 splits at u = 0 for even N, and clipping keeps u within the vertices' range (new vertices
-// lie on edges), so a receiver with u > 0 at every vertex has nothing in the left half, and one with u < 0
-// everywhere nothing in the right half (even N; odd N splits off the axis).
-inline std::uint8_t task_mask(const FaceTask& task, int resolution) {
-  const auto face = static_cast<std::uint8_t>(1u << static_cast<int>(task.face));
-  if (task.face != HemicubeFace::kTop) return face;
-  if (task.x0 == 0) return face | kMaskUNotPositive;
-  return resolution % 2 != 0 ? face : face | kMaskUNotNegative;
+// Bits of PreparedReceivers::face_mask after the five faces': some vertex of the receiver lies on that side of a
+// line where two tasks meet (from the outcodes' bits of the same names).
+using FaceMask = std::uint16_t;
+inline constexpr FaceMask kMaskUNotPositive = 1u << 5;
+inline constexpr FaceMask kMaskUNotNegative = 1u << 6;
+inline constexpr FaceMask kMaskVNotPositive = 1u << 7;
+inline constexpr FaceMask kMaskVNotNegative = 1u << 8;
+inline constexpr FaceMask kMaskNotRightOfQuarter = 1u << 9;
+inline constexpr FaceMask kMaskNotLeftOfQuarter = 1u << 10;
+inline constexpr FaceMask kMaskNotRightOfThreeQuarters = 1u << 11;
+inline constexpr FaceMask kMaskNotLeftOfThreeQuarters = 1u << 12;
+// The bits a receiver's face_mask needs, all of them, to cover part of the task's columns: its face, and the sides
+// of the lines that bound the task's columns: a cheap test before clipping. Column x = (l1 / a + 1) N / 2 of a face
+// (l1 = u on the top face and the v faces, v on the u faces) is N / 2 at l1 = 0, and on the top face N / 4 and
+// 3 N / 4 at 2u + w = 0 and 2u - w = 0. Clipping keeps each of those linear functions within its range over the
+// vertices (new vertices lie on edges; the quarter lines' margin covers the rounding), so a receiver with u > 0 at
+// every vertex has nothing left of the top face's middle, and so on. A line off a pixel boundary (N odd, or not
+// divisible by 4 for the quarters) gives no test on the side where its pixel column lies.
+inline FaceMask task_mask(const FaceTask& task, int resolution) {
+  const auto face = static_cast<FaceMask>(1u << static_cast<int>(task.face));
+  const int n = resolution, h = n / 2;
+  const bool even = n % 2 == 0, quarters = n % 4 == 0;
+  const bool top = task.face == HemicubeFace::kTop;
+  const FaceMask not_positive = top || task.face == HemicubeFace::kPosV || task.face == HemicubeFace::kNegV
+                                    ? kMaskUNotPositive
+                                    : kMaskVNotPositive;
+  const FaceMask not_negative = not_positive == kMaskUNotPositive ? kMaskUNotNegative : kMaskVNotNegative;
+  FaceMask need = face;
+  if (task.x1 <= h) need |= not_positive;  // left of the middle: l1 <= 0 at some vertex
+  if (task.x0 >= h && even) need |= not_negative;
+  if (top && quarters) {
+    if (task.x1 == n / 4) need |= kMaskNotRightOfQuarter;
+    if (task.x0 == n / 4) need |= kMaskNotLeftOfQuarter;
+    if (task.x1 == 3 * n / 4) need |= kMaskNotRightOfThreeQuarters;
+    if (task.x0 == 3 * n / 4) need |= kMaskNotLeftOfThreeQuarters;
+  }
+  return need;
 }
 
 // The pixels of one task that a re-shot subset's receivers may cover (backend.h: compute() for a subset), as
@@ -391,15 +446,17 @@ class PreparedReceivers {
     return buffer.first(count);
   }
   // Bit f set when receiver i is not culled and may touch face f; kMaskUNotPositive and kMaskUNotNegative.
-  std::uint8_t face_mask(std::size_t i) const { return face_mask_[i]; }
+  FaceMask face_mask(std::size_t i) const { return face_mask_[i]; }
   // OR of the outcodes of receiver i's vertices.
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
-  // The receivers that may touch the columns of task `index` of face_tasks (their face_mask has the task_mask; after
-  // prepare_subset, only those it put on that task's list), in order, into `out`: a pass without branches, so the
-  // task's loop does not mispredict on every other receiver.
-  void task_receivers(int index, const FaceTask& task, int resolution, std::vector<std::uint32_t>& out) const;
+  // For every task k of face_tasks on `face`, the receivers that may touch its columns (their face_mask has the
+  // task_mask; after prepare_subset, only those it put on that task's list), in order, into lists[k]: one pass
+  // without branches over the receivers for all the face's tasks, so a task's loop does not mispredict on every
+  // other receiver.
+  void task_receivers(HemicubeFace face, const std::array<FaceTask, kFaceTasks>& tasks, int resolution,
+                      std::array<std::vector<std::uint32_t>, kFaceTasks>& lists) const;
 
  private:
   // A ball holding every point of one patch's receivers (prepare_subset).
@@ -428,13 +485,13 @@ class PreparedReceivers {
   std::vector<Vec3> point_local_;           // per point of the view: local coordinates
   std::vector<std::uint32_t> point_code_;   // per point: frustum_outcode
   std::vector<std::uint32_t> outside_;
-  std::vector<std::uint8_t> face_mask_;
+  std::vector<FaceMask> face_mask_;
   BackFaceCulling culling_;
   std::size_t prepared_count_ = 0;
   // prepare_subset's state. task_bits_[i]: bit k when receiver i goes on task k's list; every bit for the subset's.
-  static constexpr std::uint8_t kInSubset = 0xff;
+  static constexpr TaskSet kInSubset = 0xffff;
   bool subset_ = false;
-  std::vector<std::uint8_t> task_bits_;
+  std::vector<TaskSet> task_bits_;
   std::array<TileMask, kFaceTasks> masks_;
   std::uint64_t balls_revision_ = 0;  // of the view the balls were found for (revisions start at 1)
   std::size_t balls_size_ = 0;
@@ -455,7 +512,7 @@ class PreparedReceivers {
   std::vector<std::uint32_t> slot_patch_;
   std::vector<PatchBall> slot_balls_;
   std::vector<PatchBox> slot_boxes_;
-  std::vector<std::uint8_t> slot_bits_;
+  std::vector<TaskSet> slot_bits_;
   std::vector<PatchBox> cluster_boxes_;
   std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
   std::vector<std::uint32_t> patch_receivers_;

@@ -313,9 +313,67 @@ TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
       const bool outside[4] = {p.x - p.y < 0.0, p.x + p.y < 0.0, p.x - p.z < 0.0, (top ? p.x + p.z : p.z) < 0.0};
       for (int k = 0; k < 4; ++k) EXPECT_EQ(((code >> (4 * f + k)) & 1u) != 0, outside[k]) << f << " " << k;
     }
-    // The sides of u = 0, where the top face's column halves meet (u = +-0.0 is on both).
+    // The sides of the lines where face tasks meet: u = 0 and v = 0 (+-0.0 is on both sides), and the top face's
+    // quarter lines 2u = -w and 2u = w, with their margin.
     EXPECT_EQ((code & kOutcodeUNotPositive) != 0, !(q.x > 0.0));
     EXPECT_EQ((code & kOutcodeUNotNegative) != 0, !(q.x < 0.0));
+    EXPECT_EQ((code & kOutcodeVNotPositive) != 0, !(q.y > 0.0));
+    EXPECT_EQ((code & kOutcodeVNotNegative) != 0, !(q.y < 0.0));
+    const double margin = 1e-9 * (std::abs(q.x) + std::abs(q.z));
+    EXPECT_EQ((code & kOutcodeNotRightOfQuarter) != 0, !(2.0 * q.x + q.z > margin));
+    EXPECT_EQ((code & kOutcodeNotLeftOfQuarter) != 0, !(2.0 * q.x + q.z < -margin));
+    EXPECT_EQ((code & kOutcodeNotRightOfThreeQuarters) != 0, !(2.0 * q.x - q.z > margin));
+    EXPECT_EQ((code & kOutcodeNotLeftOfThreeQuarters) != 0, !(2.0 * q.x - q.z < -margin));
+  }
+}
+
+// A receiver that reaches a face but is left off one of its tasks' lists (its face mask lacks a side bit of the
+// task's mask) has nothing in that task's columns: clipped to the face and projected, it lies wholly on one side of
+// them. Random triangles round the shooter, a quarter of them with a vertex on a line where tasks meet, at
+// resolutions divisible by 4, odd, and even but not divisible by 4.
+TEST(HemicubeGeometry, TaskListsKeepEveryReceiverThatReachesATask) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0);
+  ReceiverView view;
+  std::uint32_t added = 0;
+  for (int k = 0; k < 4000; ++k) {
+    const Vec3 centre(coord(rng), coord(rng), 0.1 + 0.9 * std::abs(coord(rng)));
+    Polygon triangle;
+    for (int v = 0; v < 3; ++v) triangle.push_back(centre + 0.3 * Vec3(coord(rng), coord(rng), coord(rng)));
+    if (k % 4 == 1) triangle[0].x = 0.0;                    // on u = 0
+    if (k % 4 == 2) triangle[1].y = 0.0;                    // on v = 0
+    if (k % 4 == 3) triangle[2].x = -0.5 * triangle[2].z;  // on the quarter line 2u = -w
+    Vec3 normal = glm::cross(triangle[1] - triangle[0], triangle[2] - triangle[0]);
+    if (!(glm::length(normal) > 1e-6)) continue;
+    if (glm::dot(normal, triangle[0]) > 0.0) std::swap(triangle[1], triangle[2]);  // facing the shooter
+    testing::add(view, triangle, added, added);
+    ++added;
+  }
+  const Shooter shooter = Shooter::from_normal(Vec3(0.0), Vec3(0.0, 0.0, 1.0));
+  for (const int resolution : {100, 101, 102}) {
+    PreparedReceivers prepared;
+    prepared.prepare(shooter, view);
+    const double half = 0.5 * resolution;
+    std::vector<Vec3> local(3), scratch(clipped_capacity(3)), clipped(clipped_capacity(3));
+    std::vector<Vec2> projected(clipped_capacity(3));
+    std::size_t left_off = 0;
+    for (std::size_t i = 0; i < view.size(); ++i) {
+      for (const FaceTask& task : face_tasks(resolution)) {
+        const auto face = static_cast<FaceMask>(1u << static_cast<int>(task.face));
+        const FaceMask need = task_mask(task, resolution);
+        if ((prepared.face_mask(i) & face) == 0 || (prepared.face_mask(i) & need) == need) continue;
+        ++left_off;
+        const std::size_t m =
+            clip_to_face(prepared.local_polygon(i, local), task.face, prepared.outside_mask(i), scratch, clipped);
+        ProjectedBox box;
+        if (m == 0 || !project_clipped(task.face, std::span<const Vec3>(clipped.data(), m), half, 0.0, projected, box))
+          continue;
+        EXPECT_TRUE(box.x_max <= task.x0 || box.x_min >= task.x1)
+            << "N " << resolution << " receiver " << i << " face " << static_cast<int>(task.face) << " columns ["
+            << task.x0 << ", " << task.x1 << ") box [" << box.x_min << ", " << box.x_max << "]";
+      }
+    }
+    EXPECT_GT(left_off, view.size() / 4) << "N " << resolution;  // the lines leave many receivers off some tasks
   }
 }
 
