@@ -329,7 +329,7 @@ TEST(HemicubeGeometry, OutcodesAreTheFacePlaneSigns) {
 
 // A receiver that reaches a face but is left off one of its tasks' lists (its face mask lacks a side bit of the
 // task's mask) has nothing in that task's columns: clipped to the face and projected, it lies wholly on one side of
-// them. Random triangles round the shooter, a quarter of them with a vertex on a line where tasks meet, at
+// them. Random triangles round the shooter, four in five with a vertex on a line where tasks meet, at
 // resolutions divisible by 4, odd, and even but not divisible by 4.
 TEST(HemicubeGeometry, TaskListsKeepEveryReceiverThatReachesATask) {
   std::mt19937_64 rng(11);
@@ -340,9 +340,10 @@ TEST(HemicubeGeometry, TaskListsKeepEveryReceiverThatReachesATask) {
     const Vec3 centre(coord(rng), coord(rng), 0.1 + 0.9 * std::abs(coord(rng)));
     Polygon triangle;
     for (int v = 0; v < 3; ++v) triangle.push_back(centre + 0.3 * Vec3(coord(rng), coord(rng), coord(rng)));
-    if (k % 4 == 1) triangle[0].x = 0.0;                    // on u = 0
-    if (k % 4 == 2) triangle[1].y = 0.0;                    // on v = 0
-    if (k % 4 == 3) triangle[2].x = -0.5 * triangle[2].z;  // on the quarter line 2u = -w
+    if (k % 5 == 1) triangle[0].x = 0.0;                    // on u = 0
+    if (k % 5 == 2) triangle[1].y = 0.0;                    // on v = 0
+    if (k % 5 == 3) triangle[2].x = -0.5 * triangle[2].z;  // on the quarter line 2u = -w
+    if (k % 5 == 4) triangle[0].x = 0.5 * triangle[0].z;   // on the three-quarter line 2u = w
     Vec3 normal = glm::cross(triangle[1] - triangle[0], triangle[2] - triangle[0]);
     if (!(glm::length(normal) > 1e-6)) continue;
     if (glm::dot(normal, triangle[0]) > 0.0) std::swap(triangle[1], triangle[2]);  // facing the shooter
