@@ -123,13 +123,13 @@ void TaskSums::start(const std::array<FaceTask, kFaceTasks>& tasks, int resoluti
   }
   clean_ = false;
   tbb::parallel_for(0, kHemicubeFaces, [&](int face) {
-    prepared.task_receivers(static_cast<HemicubeFace>(face), tasks, resolution, receivers_);
+    prepared.task_receivers(static_cast<HemicubeFace>(face), tasks, resolution, lists_);
   });
 }
 
 std::array<std::size_t, kFaceTasks> TaskSums::loads() const {
   std::array<std::size_t, kFaceTasks> loads{};
-  for (std::size_t k = 0; k < loads.size(); ++k) loads[k] = receivers_[k].size();
+  for (std::size_t k = 0; k < loads.size(); ++k) loads[k] = lists_.size[k];
   return loads;
 }
 
@@ -143,7 +143,7 @@ void TaskSums::combine(std::span<const std::uint32_t> subset, std::span<double> 
       std::fill(out.begin() + static_cast<std::ptrdiff_t>(range.begin()),
                 out.begin() + static_cast<std::ptrdiff_t>(range.end()), 0.0);
       for (std::size_t k = 0; k < sums_.size(); ++k) {
-        const std::vector<std::uint32_t>& list = receivers_[k];
+        const std::span<const std::uint32_t> list = lists_.list(k);
         const auto first = std::lower_bound(list.begin(), list.end(), range.begin());
         const auto last = std::lower_bound(first, list.end(), range.end());
         for (auto it = first; it != last; ++it) {
@@ -159,7 +159,7 @@ void TaskSums::combine(std::span<const std::uint32_t> subset, std::span<double> 
       out[i] = sum;
     }
     for (std::size_t k = 0; k < sums_.size(); ++k)
-      for (const std::uint32_t i : receivers_[k]) sums_[k][i] = 0.0;
+      for (const std::uint32_t i : lists_.list(k)) sums_[k][i] = 0.0;
   }
   clean_ = true;
 }
@@ -686,7 +686,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
 
 void PreparedReceivers::task_receivers(HemicubeFace face, const std::array<FaceTask, kFaceTasks>& tasks,
                                        int resolution,
-                                       std::array<std::vector<std::uint32_t>, kFaceTasks>& lists) const {
+                                       TaskLists& lists) const {
   constexpr std::size_t kMost = 4;  // tasks on one face
   std::array<std::size_t, kMost> index{};
   std::array<FaceMask, kMost> need{};
@@ -700,8 +700,8 @@ void PreparedReceivers::task_receivers(HemicubeFace face, const std::array<FaceT
     index[strips] = k;
     need[strips] = task_mask(tasks[k], resolution);
     bit[strips] = static_cast<TaskSet>(1u << k);
-    lists[k].resize(count);
-    out[strips] = lists[k].data();
+    if (lists.ids[k].size() < count) lists.ids[k].resize(count);
+    out[strips] = lists.ids[k].data();
     ++strips;
   }
   // The loop over the face's tasks unrolled (two or four of them).
@@ -732,7 +732,7 @@ void PreparedReceivers::task_receivers(HemicubeFace face, const std::array<FaceT
   } else {
     throw Error("face tasks: " + std::to_string(strips) + " tasks on one face");
   }
-  for (std::size_t t = 0; t < strips; ++t) lists[index[t]].resize(n[t]);
+  for (std::size_t t = 0; t < strips; ++t) lists.size[index[t]] = n[t];
 }
 
 void TileMask::reset(int width, int height) {

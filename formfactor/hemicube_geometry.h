@@ -415,6 +415,15 @@ class TileMask {
   std::vector<std::uint64_t> rows_;  // bit t of row r: tile (t, r)
 };
 
+// Per face task, the receivers on its list: ids[k][0, size[k]). The vectors only grow, to the largest view seen: cut
+// back to each list's length and grown again, they were zeroed over the difference in every shot (a twelfth of a
+// fresh shot's listing time went to that).
+struct TaskLists {
+  std::array<std::vector<std::uint32_t>, kFaceTasks> ids;
+  std::array<std::size_t, kFaceTasks> size{};
+  std::span<const std::uint32_t> list(std::size_t k) const { return {ids[k].data(), size[k]}; }
+};
+
 // Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
 // receiver may reach. Reused across shots without reallocating once warmed up.
 class PreparedReceivers {
@@ -452,11 +461,11 @@ class PreparedReceivers {
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
   // For every task k of face_tasks on `face`, the receivers that may touch its columns (their face_mask has the
-  // task_mask; after prepare_subset, only those it put on that task's list), in order, into lists[k]: one pass
+  // task_mask; after prepare_subset, only those it put on that task's list), in order, into lists' list k: one pass
   // without branches over the receivers for all the face's tasks, so a task's loop does not mispredict on every
   // other receiver.
   void task_receivers(HemicubeFace face, const std::array<FaceTask, kFaceTasks>& tasks, int resolution,
-                      std::array<std::vector<std::uint32_t>, kFaceTasks>& lists) const;
+                      TaskLists& lists) const;
 
  private:
   // A ball holding every point of one patch's receivers (prepare_subset).
@@ -545,7 +554,7 @@ class TaskSums {
   void start(const std::array<FaceTask, kFaceTasks>& tasks, int resolution, const PreparedReceivers& prepared,
              std::size_t receivers);
   std::span<double> sums(int task) { return sums_[static_cast<std::size_t>(task)]; }
-  std::span<const std::uint32_t> receivers(int task) const { return receivers_[static_cast<std::size_t>(task)]; }
+  std::span<const std::uint32_t> receivers(int task) const { return lists_.list(static_cast<std::size_t>(task)); }
   // Per task, the receivers on its list (run_face_tasks' loads).
   std::array<std::size_t, kFaceTasks> loads() const;
   // out[i] = the tasks' sums added in task order, for every i of `subset` (every receiver when it is empty);
@@ -554,7 +563,7 @@ class TaskSums {
 
  private:
   std::array<std::vector<double>, kFaceTasks> sums_;
-  std::array<std::vector<std::uint32_t>, kFaceTasks> receivers_;
+  TaskLists lists_;
   bool clean_ = false;
 };
 
