@@ -742,6 +742,8 @@ void TileMask::reset(int width, int height) {
   while (((width - 1) >> shift_) >= 64) ++shift_;
   rows_.assign(static_cast<std::size_t>(((height - 1) >> shift_) + 1), 0);
   empty_ = true;
+  marked_low_ = static_cast<int>(rows_.size());
+  marked_high_ = -1;
 }
 
 bool TileMask::tiles(double lo, double hi, int size, int& t0, int& t1) const {
@@ -764,12 +766,18 @@ void TileMask::add(double x_min, double x_max, double y_min, double y_max) {
   const std::uint64_t bits = tile_bits(x0, x1);
   for (int y = y0; y <= y1; ++y) rows_[static_cast<std::size_t>(y)] |= bits;
   empty_ = false;
+  marked_low_ = std::min(marked_low_, y0);
+  marked_high_ = std::max(marked_high_, y1);
 }
 
 bool TileMask::overlaps(double x_min, double x_max, double y_min, double y_max) const {
   int x0, x1, y0, y1;
   if (!tiles(x_min, x_max, width_, x0, x1) || !tiles(y_min, y_max, height_, y0, y1)) return false;
   const std::uint64_t bits = tile_bits(x0, x1);
+  // Only the rows with a marked tile can answer yes: a region tall next to the few rows a subset marks (a cluster
+  // of patches, a receiver near the shooter) reads no more than those.
+  y0 = std::max(y0, marked_low_);
+  y1 = std::min(y1, marked_high_);
   for (int y = y0; y <= y1; ++y)
     if ((rows_[static_cast<std::size_t>(y)] & bits) != 0) return true;
   return false;

@@ -413,6 +413,7 @@ class TileMask {
   int width_ = 0, height_ = 0, shift_ = 0;
   bool empty_ = true;
   std::vector<std::uint64_t> rows_;  // bit t of row r: tile (t, r)
+  int marked_low_ = 0, marked_high_ = -1;  // the rows with a marked tile lie in [marked_low_, marked_high_]
 };
 
 // Per face task, the receivers on its list: ids[k][0, size[k]). The vectors only grow, to the largest view seen: cut

@@ -578,6 +578,16 @@ TEST(HemicubeGeometry, TileMaskMarksThePixelsOfItsBoxes) {
   EXPECT_TRUE(small.overlaps(-1.0, 0.2, 29.5, 31.0));
   EXPECT_FALSE(small.overlaps(60.0, 70.0, 0.0, 29.0));  // outside the viewport
   EXPECT_FALSE(small.overlaps(1.0, 3.0, 28.0, 29.0));
+  // Marks added below and above the first: a tall region finds each, whatever the order they came in.
+  small.reset(50, 30);
+  small.add(30.0, 30.5, 20.2, 20.8);
+  small.add(40.0, 40.5, 3.2, 3.8);
+  small.add(45.0, 45.5, 25.2, 25.8);
+  EXPECT_TRUE(small.overlaps(40.0, 40.9, 0.0, 29.0));
+  EXPECT_TRUE(small.overlaps(45.0, 45.9, 0.0, 29.0));
+  EXPECT_TRUE(small.overlaps(30.0, 30.9, 0.0, 29.0));
+  EXPECT_FALSE(small.overlaps(31.0, 39.9, 0.0, 29.0));
+  EXPECT_FALSE(small.overlaps(40.0, 40.9, 4.0, 29.0));
 
   TileMask large;  // 1000 pixels wide: 16-pixel tiles, 63 to a row
   large.reset(1000, 500);
