@@ -417,21 +417,25 @@ bool PreparedReceivers::find_patch_balls(const ReceiverView& receivers) {
     }
   });
   // Each cluster's box, on the scene's axes, holds its patches' boxes: a cluster lying along one wall (most do) is
-  // flat, where a ball round it reached as far off the wall as along it.
-  cluster_boxes_.resize((slots + kClusterPatches - 1) / kClusterPatches);
-  for (std::size_t c = 0; c < cluster_boxes_.size(); ++c) {
-    const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
+  // flat, where a ball round it reached as far off the wall as along it. A group's box holds its clusters' boxes (in
+  // the office's subset shots the group boxes took the cluster tests from 1.52 and 1.54 s to 1.45 and 1.39 s).
+  const auto enclose = [](std::span<const PatchBox> boxes) {
     Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (std::size_t k = first; k < last; ++k) {
-      const PatchBox& box = slot_boxes_[k];
+    for (const PatchBox& box : boxes) {
       Vec3 extent(0.0);
       for (int a = 0; a < 3; ++a) extent += glm::abs(box.axes[static_cast<std::size_t>(a)]) * box.half[a];
       lo = glm::min(lo, box.centre - extent);
       hi = glm::max(hi, box.centre + extent);
     }
-    cluster_boxes_[c] = PatchBox{0.5 * (lo + hi), {Vec3{1.0, 0.0, 0.0}, Vec3{0.0, 1.0, 0.0}, Vec3{0.0, 0.0, 1.0}},
-                                 0.5 * (hi - lo)};
-  }
+    return PatchBox{0.5 * (lo + hi), {Vec3{1.0, 0.0, 0.0}, Vec3{0.0, 1.0, 0.0}, Vec3{0.0, 0.0, 1.0}}, 0.5 * (hi - lo)};
+  };
+  const auto enclose_runs = [&](std::span<const PatchBox> boxes, std::size_t run, std::vector<PatchBox>& out) {
+    out.resize((boxes.size() + run - 1) / run);
+    for (std::size_t c = 0; c < out.size(); ++c)
+      out[c] = enclose(boxes.subspan(c * run, std::min(run, boxes.size() - c * run)));
+  };
+  enclose_runs(slot_boxes_, kClusterPatches, cluster_boxes_);
+  enclose_runs(cluster_boxes_, kGroupClusters, group_boxes_);
   return true;
 }
 
@@ -638,16 +642,20 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   for (int k = 0; k < kFaceTasks; ++k)
     if (!masks_[static_cast<std::size_t>(k)].empty()) marked |= static_cast<TaskSet>(1u << k);
   const std::size_t slots = slot_patch_.size();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cluster_boxes_.size(), 8),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, group_boxes_.size(), 1),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t c = range.begin(); c != range.end(); ++c) {
-      const TaskSet cluster = box_reach(cluster_boxes_[c], marked);
-      const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
-      for (std::size_t k = first; k < last; ++k) {
-        // The ball first (cheaper), then the box for the tasks the ball may reach.
-        const bool tested = cluster != 0 && culling_.patch_faces(slot_patch_[k]);
-        const TaskSet ball = tested ? reach(slot_balls_[k], cluster) : 0;
-        slot_bits_[k] = ball != 0 ? box_reach(slot_boxes_[k], ball) : 0;
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const TaskSet group = box_reach(group_boxes_[g], marked);
+      const std::size_t clusters_end = std::min(cluster_boxes_.size(), (g + 1) * kGroupClusters);
+      for (std::size_t c = g * kGroupClusters; c < clusters_end; ++c) {
+        const TaskSet cluster = group != 0 ? box_reach(cluster_boxes_[c], group) : 0;
+        const std::size_t first = c * kClusterPatches, last = std::min(slots, first + kClusterPatches);
+        for (std::size_t k = first; k < last; ++k) {
+          // The ball first (cheaper), then the box for the tasks the ball may reach.
+          const bool tested = cluster != 0 && culling_.patch_faces(slot_patch_[k]);
+          const TaskSet ball = tested ? reach(slot_balls_[k], cluster) : 0;
+          slot_bits_[k] = ball != 0 ? box_reach(slot_boxes_[k], ball) : 0;
+        }
       }
     }
   });

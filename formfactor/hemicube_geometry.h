@@ -515,15 +515,16 @@ class PreparedReceivers {
   };
   // The patches with receivers, one per slot, ordered so that kClusterPatches consecutive slots (a cluster) lie
   // close together; per slot its ball, box and (in prepare_subset) the tasks it may reach. A cluster's box, on the
-  // scene's axes and holding its patches' boxes, is tested first.
-  static constexpr std::size_t kClusterPatches = 16;
+  // scene's axes and holding its patches' boxes, is tested first, and before it the box of its group of
+  // kGroupClusters consecutive clusters.
+  static constexpr std::size_t kClusterPatches = 16, kGroupClusters = 8;
   // slot_patch_: `patches` in the order of their centres along a Morton curve.
   void group_patches(std::span<const std::uint32_t> patches, std::span<const Vec3> centres);
   std::vector<std::uint32_t> slot_patch_;
   std::vector<PatchBall> slot_balls_;
   std::vector<PatchBox> slot_boxes_;
   std::vector<TaskSet> slot_bits_;
-  std::vector<PatchBox> cluster_boxes_;
+  std::vector<PatchBox> cluster_boxes_, group_boxes_;
   std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
   std::vector<std::uint32_t> patch_receivers_;
   std::vector<std::uint8_t> point_wanted_;    // per point, in prepare_subset: 1 once a listed receiver has it

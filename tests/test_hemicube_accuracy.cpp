@@ -703,6 +703,60 @@ TEST(HemicubeAccuracy, SubsetSkipsWholePatchesAndGetsTheSameNumbers) {
   EXPECT_LT(prepared, offered / 8) << prepared << " of " << offered;
 }
 
+// With a patch per piece (729 patches: 46 clusters of 16 in 6 groups of 8 clusters), prepare_subset skips whole groups
+// and clusters of patches as well as single patches; the subset still gets exactly what it gets with every receiver
+// prepared (sparse patch ids).
+TEST(HemicubeAccuracy, SubsetSkipsGroupsOfPatchesAndGetsTheSameNumbers) {
+  const ReceiverView coarse = room_with_block();
+  const auto pieces_as_patches = [&](std::uint32_t stride) {
+    ReceiverView view;
+    std::uint32_t patch = 0;
+    for (std::uint32_t i = 0; i < coarse.size(); ++i) {
+      const std::span<const Vec3> q = coarse.polygon(i);
+      for (const Polygon& piece : grid(q[0], q[1] - q[0], q[3] - q[0], 3, 3))
+        view.add(piece, coarse.plane(i), coarse.surface(i), stride * patch++);
+    }
+    return view;
+  };
+  const ReceiverView dense = pieces_as_patches(1), sparse = pieces_as_patches(1000);
+  ASSERT_GT(dense.size(), 2 * 16 * 8);  // more than two groups
+  std::vector<std::uint32_t> corner, block, every_eleventh;
+  for (std::uint32_t i = 0; i < dense.size(); ++i) {
+    if (i / 9 == 40) corner.push_back(i);  // the pieces of one coarse receiver
+    if (dense.surface(i) >= 6) block.push_back(i);
+    if (i % 11 == 5) every_eleventh.push_back(i);
+  }
+  ASSERT_EQ(corner.size(), 9u);
+  const std::vector<Shooter> shooters = {
+      rotated_shooter({0.31, 0.72, 0.4}, glm::normalize(Vec3(0.4, -0.3, -1.0)), 0.5),
+      rotated_shooter({0.45, 0.65, 0.9}, Vec3(0, 0, -1), 0.3),
+      rotated_shooter({0.6001, 0.62, 0.2}, Vec3(1, 0, 0), 0.1),
+  };
+  std::size_t prepared = 0, offered = 0;
+  for (const char* name : {"aa-hemicube", "hemicube"}) {
+    for (int n : {50, 101}) {
+      auto with_groups = make_backend(name, {.resolution = n}), without = make_backend(name, {.resolution = n});
+      for (const Shooter& s : shooters) {
+        for (const auto* subset : {&corner, &block, &every_eleventh}) {
+          std::vector<double> skipped(dense.size(), -1.0), all(dense.size(), -1.0);
+          with_groups->compute(s, dense, *subset, skipped);
+          without->compute(s, sparse, *subset, all);
+          for (const std::uint32_t i : *subset)
+            EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
+        }
+      }
+      PreparedReceivers p;
+      for (const Shooter& s : shooters) {
+        p.prepare_subset(s, dense, corner, HemicubeGeometry(n));
+        prepared += p.prepared_count();
+        offered += dense.size();
+      }
+    }
+  }
+  // One coarse receiver's pieces lie in a small part of each hemicube: 406 of 8 748 receivers were prepared.
+  EXPECT_LT(prepared, offered / 10) << prepared << " of " << offered;
+}
+
 // A view marked as a refinement of the last one a back end saw (ReceiverView::mark_refinement_of: the solver's view
 // after splits) keeps that view's patch balls and boxes; its subsets must still get what a back end that found them
 // afresh gives. A view that is not marked, or marked as refining another view than the last one seen, has its balls
