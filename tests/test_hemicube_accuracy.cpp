@@ -654,6 +654,28 @@ ReceiverView room_with_block_cut(std::uint32_t stride, int cuts = 3, const Vec3&
   return view;
 }
 
+// Every subset's factors from `dense` (whose patches prepare_subset may skip) equal those from `sparse` (the same
+// receivers with sparse patch ids: every receiver prepared), bit for bit, for both hemicubes at N = 50 and 101.
+void expect_subsets_get_the_same(const ReceiverView& dense, const ReceiverView& sparse,
+                                 std::span<const Shooter> shooters,
+                                 std::span<const std::vector<std::uint32_t>* const> subsets) {
+  ASSERT_EQ(dense.size(), sparse.size());
+  for (const char* name : {"aa-hemicube", "hemicube"}) {
+    for (int n : {50, 101}) {
+      auto skipping = make_backend(name, {.resolution = n}), preparing_all = make_backend(name, {.resolution = n});
+      for (const Shooter& s : shooters) {
+        for (const std::vector<std::uint32_t>* subset : subsets) {
+          std::vector<double> skipped(dense.size(), -1.0), all(dense.size(), -1.0);
+          skipping->compute(s, dense, *subset, skipped);
+          preparing_all->compute(s, sparse, *subset, all);
+          for (const std::uint32_t i : *subset)
+            EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
+        }
+      }
+    }
+  }
+}
+
 // prepare_subset prepares only the patches whose ball may reach a tile of the subset, and skips the rest before
 // transforming their points. The subset must get exactly what it gets with every receiver prepared (sparse patch
 // ids), for both hemicubes, from shooters that have patches on all sides, across face seams, and next to them
@@ -674,27 +696,17 @@ TEST(HemicubeAccuracy, SubsetSkipsWholePatchesAndGetsTheSameNumbers) {
       rotated_shooter({0.45, 0.65, 0.3501}, Vec3(0, 0, 1), 0.7),  // just above the block's top
       rotated_shooter({0.6001, 0.62, 0.2}, Vec3(1, 0, 0), 0.1),   // on a side of the block
   };
+  const std::vector<std::uint32_t>* const subsets[] = {&one_patch, &block, &every_seventh};
+  expect_subsets_get_the_same(dense, sparse, shooters, subsets);
   std::size_t prepared = 0, offered = 0;
-  for (const char* name : {"aa-hemicube", "hemicube"}) {
-    for (int n : {50, 101}) {
-      auto with_balls = make_backend(name, {.resolution = n}), without = make_backend(name, {.resolution = n});
-      for (const Shooter& s : shooters) {
-        for (const auto* subset : {&one_patch, &block, &every_seventh}) {
-          std::vector<double> skipped(dense.size(), -1.0), all(dense.size(), -1.0);
-          with_balls->compute(s, dense, *subset, skipped);
-          without->compute(s, sparse, *subset, all);
-          for (const std::uint32_t i : *subset)
-            EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
-          if (subset == &one_patch && std::string_view(name) == "hemicube") {
-            PreparedReceivers p;
-            p.prepare_subset(s, dense, *subset, HemicubeGeometry(n));
-            prepared += p.prepared_count();
-            offered += dense.size();
-            p.prepare_subset(s, sparse, *subset, HemicubeGeometry(n));
-            EXPECT_EQ(p.prepared_count(), sparse.size());
-          }
-        }
-      }
+  for (int n : {50, 101}) {
+    for (const Shooter& s : shooters) {
+      PreparedReceivers p;
+      p.prepare_subset(s, dense, one_patch, HemicubeGeometry(n));
+      prepared += p.prepared_count();
+      offered += dense.size();
+      p.prepare_subset(s, sparse, one_patch, HemicubeGeometry(n));
+      EXPECT_EQ(p.prepared_count(), sparse.size());
     }
   }
   // The pieces of one wall patch lie in a small part of every hemicube here: most patches are skipped, also those
@@ -732,25 +744,15 @@ TEST(HemicubeAccuracy, SubsetSkipsGroupsOfPatchesAndGetsTheSameNumbers) {
       rotated_shooter({0.45, 0.65, 0.9}, Vec3(0, 0, -1), 0.3),
       rotated_shooter({0.6001, 0.62, 0.2}, Vec3(1, 0, 0), 0.1),
   };
+  const std::vector<std::uint32_t>* const subsets[] = {&corner, &block, &every_eleventh};
+  expect_subsets_get_the_same(dense, sparse, shooters, subsets);
   std::size_t prepared = 0, offered = 0;
-  for (const char* name : {"aa-hemicube", "hemicube"}) {
-    for (int n : {50, 101}) {
-      auto with_groups = make_backend(name, {.resolution = n}), without = make_backend(name, {.resolution = n});
-      for (const Shooter& s : shooters) {
-        for (const auto* subset : {&corner, &block, &every_eleventh}) {
-          std::vector<double> skipped(dense.size(), -1.0), all(dense.size(), -1.0);
-          with_groups->compute(s, dense, *subset, skipped);
-          without->compute(s, sparse, *subset, all);
-          for (const std::uint32_t i : *subset)
-            EXPECT_EQ(skipped[i], all[i]) << name << " N=" << n << " receiver " << i;
-        }
-      }
+  for (int n : {50, 101}) {
+    for (const Shooter& s : shooters) {
       PreparedReceivers p;
-      for (const Shooter& s : shooters) {
-        p.prepare_subset(s, dense, corner, HemicubeGeometry(n));
-        prepared += p.prepared_count();
-        offered += dense.size();
-      }
+      p.prepare_subset(s, dense, corner, HemicubeGeometry(n));
+      prepared += p.prepared_count();
+      offered += dense.size();
     }
   }
   // One coarse receiver's pieces lie in a small part of each hemicube: 406 of 8 748 receivers were prepared.
