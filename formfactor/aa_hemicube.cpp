@@ -74,17 +74,9 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   }
   b.arena.reset(width, height);
 
-  // The box of the placed receivers' boxes: every entry lies in it (the area rasterizer visits only its polygon's
-  // box), and the walk looks nowhere else. A NaN coordinate leaves it as it was (std::min and std::max keep their
-  // first argument then), and the rasterizer visits nothing for such a polygon.
-  double used_x_min = width, used_x_max = 0.0, used_y_min = height, used_y_max = 0.0;
   for (const std::uint32_t i : candidates) {
     const std::size_t m = place(i);
     if (m == 0 || (masked && !tiles->overlaps(box.x_min, box.x_max, box.y_min, box.y_max))) continue;
-    used_x_min = std::min(used_x_min, box.x_min);
-    used_x_max = std::max(used_x_max, box.x_max);
-    used_y_min = std::min(used_y_min, box.y_min);
-    used_y_max = std::max(used_y_max, box.y_max);
     InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const std::uint32_t receiver = i;
@@ -142,14 +134,6 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
   std::uint32_t run_receiver = 0;
   double run_sum = 0.0;
-  // Its pixels: [floor, ceil) within the face, as the rasterizer clips its boxes.
-  const auto pixel_range = [](double lo, double hi, int size, int& first, int& last) {
-    first = lo <= 0.0 ? 0 : static_cast<int>(std::min(lo, static_cast<double>(size)));
-    last = hi >= size ? size : hi <= 0.0 ? 0 : static_cast<int>(std::ceil(hi));
-  };
-  StagedCoverageArena::PixelBox used{};
-  pixel_range(used_x_min, used_x_max, width, used.x0, used.x1);
-  pixel_range(used_y_min, used_y_max, height, used.y0, used.y1);
   arena.take_all([&](std::size_t pixel, std::uint32_t receiver, double visible) {
     const double contribution = visible * weight[pixel];
     if (receiver != run_receiver) {
@@ -159,7 +143,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     } else {
       run_sum += contribution;
     }
-  }, used);
+  });
   if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 

@@ -382,21 +382,11 @@ class StagedCoverageArena {
     stage_[block].push_back(Staged{entry, static_cast<std::uint32_t>(pixel - block * block_pixels_)});
   }
 
-  // Columns [x0, x1) and rows [y0, y1) of the face: where take_all looks for entries.
-  struct PixelBox {
-    int x0, x1, y0, y1;
-  };
   // Walks every pixel front to back, calling emit(pixel, receiver, E), and empties the arena. Block by block;
   // within a block, first the pixels of one surface (entries in arrival order), then the others in pixel order.
-  // Each pixel's entries come front to back, as CoverageArena::take_all gives them. Every entry offered since the
-  // reset must lie in `used` (the whole face by default): the pixels outside it are not looked at, which changes
-  // nothing, as they have nothing to emit or to clear (a subset's shot often touches a small part of the face).
+  // Each pixel's entries come front to back, as CoverageArena::take_all gives them.
   template <class Emit>
   void take_all(Emit&& emit) {
-    take_all(emit, PixelBox{0, static_cast<int>(pixels_ / height_), 0, static_cast<int>(height_)});
-  }
-  template <class Emit>
-  void take_all(Emit&& emit, const PixelBox& used) {
     for (std::size_t block = 0; block < blocks_; ++block) {
       const std::size_t begin = block * block_pixels_;
       const std::size_t end = std::min(begin + block_pixels_, pixels_);
@@ -417,15 +407,9 @@ class StagedCoverageArena {
         }
       }
       stage_[block].clear();
-      const std::size_t first_column = std::max(begin / height_, static_cast<std::size_t>(std::max(used.x0, 0)));
-      const std::size_t last_column = std::min(end / height_, static_cast<std::size_t>(std::max(used.x1, 0)));
-      const std::size_t y0 = static_cast<std::size_t>(std::max(used.y0, 0));
-      const std::size_t y1 = std::min(height_, static_cast<std::size_t>(std::max(used.y1, 0)));
-      for (std::size_t x = first_column; x < last_column; ++x) {
-        for (std::size_t p = x * height_ + y0; p < x * height_ + y1; ++p) {
-          CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit);
-          depth_[p] = kFar;
-        }
+      for (std::size_t p = begin; p < end; ++p) {
+        CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit);
+        depth_[p] = kFar;
       }
       lists_.mark_clean();
     }

@@ -60,49 +60,5 @@ TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
   }
 }
 
-// take_all given the box its entries lie in (what the AA hemicube passes: the box of the receivers it placed) walks
-// only that box, with the same values as the immediate arena, and leaves the arena empty: the next round, with
-// entries anywhere and the whole face walked, still matches. On one block and across blocks, with a box touching
-// the face's edges and one inside it.
-TEST(FormfactorCoverageList, StagedArenaWalksOnlyTheBoxOfItsEntries) {
-  std::mt19937 rng(12);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  struct Case {
-    int width, height;
-    StagedCoverageArena::PixelBox box;
-  };
-  for (const auto& [width, height, box] : {Case{100, 100, {17, 41, 3, 88}}, Case{100, 100, {0, 100, 60, 100}},
-                                           Case{300, 200, {50, 140, 0, 7}}, Case{300, 200, {120, 300, 150, 200}}}) {
-    CoverageArena immediate;
-    StagedCoverageArena staged;
-    for (int round = 0; round < 2; ++round) {
-      const bool boxed = round == 0;
-      immediate.reset(static_cast<std::size_t>(width) * height);
-      staged.reset(width, height);
-      const int x0 = boxed ? box.x0 : 0, x1 = boxed ? box.x1 : width;
-      const int y0 = boxed ? box.y0 : 0, y1 = boxed ? box.y1 : height;
-      for (std::uint32_t r = 0; r < 5000; ++r) {
-        const int x = x0 + static_cast<int>(u(rng) * (x1 - x0)), y = y0 + static_cast<int>(u(rng) * (y1 - y0));
-        const double depth = std::floor(u(rng) * 8.0);
-        const double coverage = u(rng) < 0.4 ? 1.0 : u(rng);
-        const CoverageEntry entry{depth, coverage, r, static_cast<std::uint32_t>(u(rng) * 3), 0.0f};
-        immediate.insert(static_cast<std::size_t>(x) * height + y, entry);
-        staged.insert(x, y, entry);
-      }
-      Emitted a, b;
-      immediate.take_all([&](std::size_t p, std::uint32_t r, double e) { a.emplace_back(p, r, e); });
-      const auto emit = [&](std::size_t p, std::uint32_t r, double e) { b.emplace_back(p, r, e); };
-      if (boxed) {
-        staged.take_all(emit, box);
-      } else {
-        staged.take_all(emit);
-      }
-      ASSERT_FALSE(a.empty());
-      std::stable_sort(b.begin(), b.end(), [](const auto& l, const auto& r) { return std::get<0>(l) < std::get<0>(r); });
-      EXPECT_EQ(a, b) << width << " x " << height << ", round " << round;
-    }
-  }
-}
-
 }  // namespace
 }  // namespace aarad::formfactor
