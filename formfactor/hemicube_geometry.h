@@ -455,7 +455,7 @@ class PreparedReceivers {
     for (std::size_t k = 0; k < count; ++k) buffer[k] = point_local_[corner_points_[first + k]];
     return buffer.first(count);
   }
-  // Bit f set when receiver i is not culled and may touch face f; kMaskUNotPositive and kMaskUNotNegative.
+  // Bit f set when receiver i is not culled and may touch face f; then the kMask bits of the lines where tasks meet.
   FaceMask face_mask(std::size_t i) const { return face_mask_[i]; }
   // OR of the outcodes of receiver i's vertices.
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
