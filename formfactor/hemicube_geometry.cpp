@@ -693,8 +693,7 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
 }
 
 void PreparedReceivers::task_receivers(HemicubeFace face, const std::array<FaceTask, kFaceTasks>& tasks,
-                                       int resolution,
-                                       TaskLists& lists) const {
+                                       int resolution, TaskLists& lists) const {
   constexpr std::size_t kMost = 4;  // tasks on one face
   std::array<std::size_t, kMost> index{};
   std::array<FaceMask, kMost> need{};

@@ -417,8 +417,8 @@ class TileMask {
 };
 
 // Per face task, the receivers on its list: ids[k][0, size[k]). The vectors only grow, to the largest view seen: cut
-// back to each list's length and grown again, they were zeroed over the difference in every shot (15 % of a fresh
-// shot's listing time in the office).
+// back to each list's length and grown again, they were zeroed over the difference in every shot (25 million
+// instructions of memset over a single-thread Cornell box solve, docs/benchmarks.md).
 struct TaskLists {
   std::array<std::vector<std::uint32_t>, kFaceTasks> ids;
   std::array<std::size_t, kFaceTasks> size{};
