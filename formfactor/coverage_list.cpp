@@ -28,27 +28,36 @@ bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) 
   Cell* cells = &pool_[list];
   const std::uint32_t count = cells[0].header.count;
   const std::uint32_t surface = entry.surface;
-  // The group of the entry's surface, if the list has one; meanwhile the depth position (the first group head
-  // behind the entry: positions are decided at group heads only, so groups stay contiguous).
-  std::uint32_t position = count + 1, prev_surface = kNoSurface, k = 1;
-  for (; k <= count; ++k) {
-    const CoverageEntry& e = cells[k].entry;
-    if (e.surface == surface) break;
-    if (position > count && e.surface != prev_surface && e.depth > entry.depth) position = k;
-    prev_surface = e.surface;
-  }
-  const bool joins = k <= count;
-  double group_sum = entry.coverage;
+  std::uint32_t position = count + 1;
+  double group_sum = 0.0;
+  bool joins = surface == cells[0].header.last_surface;
   if (joins) {
-    // Join the group, after its last piece.
-    do {
-      group_sum += cells[k].entry.coverage;
-      ++k;
-    } while (k <= count && cells[k].entry.surface == surface);
-    position = k;
-  } else if (position > count && cells[0].header.full != 0) {
-    return false;  // behind the covering group
+    // The group that took the last entry: go after its last piece.
+    position = cells[0].header.last_end;
+    group_sum = cells[0].header.last_sum;
+  } else {
+    // The group of the entry's surface, if the list has one; meanwhile the depth position (the first group head
+    // behind the entry: positions are decided at group heads only, so groups stay contiguous).
+    std::uint32_t prev_surface = kNoSurface, k = 1;
+    for (; k <= count; ++k) {
+      const CoverageEntry& e = cells[k].entry;
+      if (e.surface == surface) break;
+      if (position > count && e.surface != prev_surface && e.depth > entry.depth) position = k;
+      prev_surface = e.surface;
+    }
+    joins = k <= count;
+    if (joins) {
+      // Join the group, after its last piece.
+      do {
+        group_sum += cells[k].entry.coverage;
+        ++k;
+      } while (k <= count && cells[k].entry.surface == surface);
+      position = k;
+    } else if (position > count && cells[0].header.full != 0) {
+      return false;  // behind the covering group
+    }
   }
+  group_sum += entry.coverage;
   if (count == cells[0].header.capacity) {
     // Move the list to a block twice as large at the end of the pool.
     const std::uint32_t capacity = 2 * count;
@@ -62,12 +71,15 @@ bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) 
   // Insertion sort: shift the entries behind one place back.
   for (std::uint32_t i = count; i >= position; --i) cells[i + 1] = cells[i];
   cells[position].entry = entry;
-  std::uint32_t new_count = count + 1;
+  Header& header = cells[0].header;
+  header.count = count + 1;
   if (joins && group_sum >= kFullCoverage) {
-    new_count = position;  // everything behind a covering group is hidden
-    cells[0].header.full = 1;
+    header.count = position;  // everything behind a covering group is hidden
+    header.full = 1;
   }
-  cells[0].header.count = new_count;
+  header.last_surface = surface;
+  header.last_end = position + 1;
+  header.last_sum = group_sum;
   return true;
 }
 

@@ -156,6 +156,10 @@ double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&
 // the group of its surface when the list has one (after its last piece), else goes in at its depth (behind
 // entries at the same depth; positions are decided at group heads only, so groups stay contiguous). A group
 // whose coverages reach kFullCoverage drops the entries behind it and the list refuses new groups behind it.
+// A group's coverage sum is its entries' coverages added front to back. The header keeps the group that took the
+// last entry (its surface, where it ends, its sum): a pixel's entries mostly arrive a surface at a time (receivers
+// come in index order, a surface's pieces mostly numbered together), and in the office 88 % of the entries that
+// join a group join that one, without a scan of the list.
 class PartialLists {
  public:
   // Empties every list (O(1) when the walk has cleared them) and makes room for `pixels` pixels.
@@ -169,7 +173,7 @@ class PartialLists {
     if (used_ + 1 + kFirstCapacity > pool_.size()) grow(1 + kFirstCapacity);
     list = static_cast<std::uint32_t>(used_);
     used_ += 1 + kFirstCapacity;
-    pool_[list].header = Header{1, kFirstCapacity, 0, {0, 0, 0, 0, 0}};
+    pool_[list].header = Header{1, kFirstCapacity, 0, entry.surface, 2, entry.coverage};
     pool_[list + 1].entry = entry;
     return true;
   }
@@ -208,13 +212,15 @@ class PartialLists {
   struct Header {
     std::uint32_t count;
     std::uint32_t capacity;
-    std::uint32_t full;  // 1 when the list's last group covers the pixel
-    std::uint32_t unused[5];
+    std::uint32_t full;          // 1 when the list's last group covers the pixel
+    std::uint32_t last_surface;  // the group that took the last entry: its surface,
+    std::uint32_t last_end;      // the index one past its last piece,
+    double last_sum;             // and its coverages added front to back
   };
   union Cell {
     CoverageEntry entry;
     Header header;
-    Cell() : header{0, 0, 0, {0, 0, 0, 0, 0}} {}
+    Cell() : header{0, 0, 0, kNoSurface, 0, 0.0} {}
   };
   static_assert(sizeof(Header) == sizeof(CoverageEntry));
   std::uint32_t allocate(std::uint32_t capacity);  // a list block: header + capacity entries

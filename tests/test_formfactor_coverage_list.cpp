@@ -237,6 +237,65 @@ TEST(FormfactorCoverageList, ArenaKeepsAGroupWholeWhenAnotherSurfaceLiesBetweenI
   EXPECT_DOUBLE_EQ(f, 0.9);
 }
 
+// The list rules, written out plainly over groups: an entry joins its surface's group (after its last piece),
+// or starts a group before the first group whose head lies behind it; a group whose coverages reach the pixel
+// drops the groups behind it, and a covered list refuses new groups behind them all. Random arrivals, with runs
+// of one surface (the arena's shortcut for the group that took the last entry) and without.
+TEST(FormfactorCoverageList, ArenaListsFollowTheGroupRulesWhateverTheArrivals) {
+  struct Group {
+    std::uint32_t surface;
+    double head;
+    double sum;
+    std::vector<std::uint32_t> receivers;
+  };
+  std::mt19937 random(12345);
+  std::uniform_int_distribution<int> pick_surface(0, 4), pick_depth(0, 5), pick_eighths(1, 4), pick_count(2, 16);
+  std::bernoulli_distribution same_as_last(0.6);
+  int covered_lists = 0, refused = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    CoverageArena arena;
+    arena.reset(1);
+    std::vector<Group> groups;
+    bool full = false;
+    std::uint32_t surface = 0;
+    const int count = pick_count(random);
+    for (int n = 0; n < count; ++n) {
+      if (n == 0 || !same_as_last(random)) surface = static_cast<std::uint32_t>(pick_surface(random));
+      // Coverages in eighths add up exactly, so groups reach the pixel.
+      const CoverageEntry e{1.0 + pick_depth(random), pick_eighths(random) / 8.0, static_cast<std::uint32_t>(n),
+                            surface};
+      bool accepted = true;
+      auto g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.surface == surface; });
+      if (g != groups.end()) {
+        g->receivers.push_back(e.receiver);
+        g->sum += e.coverage;
+        if (g->sum >= kFullCoverage) {
+          groups.erase(g + 1, groups.end());
+          full = true;
+        }
+      } else {
+        g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.head > e.depth; });
+        if (g == groups.end() && full)
+          accepted = false;
+        else
+          groups.insert(g, Group{surface, e.depth, e.coverage, {e.receiver}});
+      }
+      refused += !accepted;
+      ASSERT_EQ(arena.insert(0, e), accepted) << "trial " << trial << ", entry " << n;
+    }
+    std::vector<std::uint32_t> expected, order;
+    for (const Group& g : groups) expected.insert(expected.end(), g.receivers.begin(), g.receivers.end());
+    arena.for_each(0, [&](const CoverageEntry& e) { order.push_back(e.receiver); });
+    ASSERT_EQ(order, expected) << "trial " << trial;
+    ASSERT_EQ(arena.full(0), full) << "trial " << trial;
+    covered_lists += full;
+  }
+  // Both kinds of list, and refusals, occurred.
+  EXPECT_GT(covered_lists, 300);
+  EXPECT_LT(covered_lists, 2700);
+  EXPECT_GT(refused, 100);
+}
+
 TEST(FormfactorCoverageList, AFullEntryAtThePartialEntrysDepthHidesItWhateverTheOrder) {
   // A partial entry at exactly the depth of a full one is not in front of it: offered after the full entry it is
   // refused, so offered before it must be dropped too, and the full receiver takes the whole pixel either way.
