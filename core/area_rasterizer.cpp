@@ -24,32 +24,35 @@ namespace {
 
 constexpr int kMaxSide = 1 << 15;
 
-// Sign of twice the signed area (the shoelace sum) of `polygon`, exactly. The double sum is used when it
-// is larger than its rounding error bound (2n + 2 terms of relative error eps, generously), otherwise the
-// sum is redone in exact rationals. Returns the sign and, in `twice_area`, the best double value.
+// Sign of twice the signed area (the shoelace sum) of `polygon`, exactly. The sum is taken about the first vertex,
+// which keeps it accurate for polygons far from the origin, and used when it is larger than its rounding error
+// bound, otherwise it is redone in exact rationals. Each term d_a.x d_b.y - d_b.x d_a.y, d = p - first vertex,
+// has its products within 3 eps (two differences and a product) and its difference within eps of the
+// magnitudes |d_a.x d_b.y| + |d_b.x d_a.y|; adding n terms adds at most n eps of them: (n + 4) eps in all, to first
+// order, taken generously as (2n + 8) eps. Returns the sign and, in `twice_area`, the best double value.
 int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
   const std::size_t n = polygon.size();
   const Vec2 origin = polygon[0];
-  double translated = 0.0, raw = 0.0, magnitude = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 a = polygon[i];
-    const Vec2 b = polygon[i + 1 == n ? 0 : i + 1];
-    translated += (a.x - origin.x) * (b.y - origin.y) - (b.x - origin.x) * (a.y - origin.y);
+  double sum = 0.0, magnitude = 0.0;
+  Vec2 a(0.0, 0.0);  // the first vertex, about itself
+  for (std::size_t i = 1; i <= n; ++i) {
+    const Vec2 b = i == n ? Vec2(0.0, 0.0) : polygon[i] - origin;
     const double t0 = a.x * b.y, t1 = b.x * a.y;
-    raw += t0 - t1;
+    sum += t0 - t1;
     magnitude += std::abs(t0) + std::abs(t1);
+    a = b;
   }
-  twice_area = translated;
+  twice_area = sum;
   if (!std::isfinite(magnitude)) return 0;  // a non-finite coordinate, or one so large products overflow
-  const double bound = static_cast<double>(2 * n + 2) * std::numeric_limits<double>::epsilon() * magnitude;
-  if (raw > bound) return translated > 0.0 ? 1 : (twice_area = raw, 1);
-  if (raw < -bound) return translated < 0.0 ? -1 : (twice_area = raw, -1);
+  const double bound = static_cast<double>(2 * n + 8) * std::numeric_limits<double>::epsilon() * magnitude;
+  if (sum > bound) return 1;
+  if (sum < -bound) return -1;
   using Q = CGAL::Exact_rational;
   Q exact = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 a = polygon[i];
-    const Vec2 b = polygon[i + 1 == n ? 0 : i + 1];
-    exact += Q(a.x) * Q(b.y) - Q(b.x) * Q(a.y);
+    const Vec2 p = polygon[i];
+    const Vec2 q = polygon[i + 1 == n ? 0 : i + 1];
+    exact += Q(p.x) * Q(q.y) - Q(q.x) * Q(p.y);
   }
   twice_area = CGAL::to_double(exact);
   return static_cast<int>(CGAL::sign(exact));
@@ -101,12 +104,12 @@ RasterResult AreaRasterizer::traverse_edges(std::span<const Vec2> polygon) {
   }
   if (max_x <= 0.0 || min_x >= width_ || max_y <= 0.0 || min_y >= height_) return result;  // wholly outside
   column_begin_ = static_cast<int>(std::max(min_x, 0.0));
-  column_end_ = static_cast<int>(std::ceil(std::min(max_x, static_cast<double>(width_))));
+  column_end_ = ceil_to_int(std::min(max_x, static_cast<double>(width_)));
   // The box's rows, up to the row of max_y (height_ when the polygon reaches above the viewport: that row
   // holds the carry from above), packed column by column at the start of the scratch buffers so a small
   // polygon touches few cache lines.
   row_begin_ = static_cast<int>(std::max(min_y, 0.0));
-  const int row_top = static_cast<int>(std::ceil(std::min(max_y, static_cast<double>(height_))));
+  const int row_top = ceil_to_int(std::min(max_y, static_cast<double>(height_)));
   stride_ = row_top - row_begin_ + 1;
 
   const double winding_sign = orientation > 0 ? 1.0 : -1.0;
@@ -270,7 +273,7 @@ void AreaRasterizer::trace_piece(double x0, double y0, double x1, double y1, dou
   constexpr double sign = kSign;
   constexpr int side = kSign > 0 ? 0 : 1;  // +1: the polygon lies below the edge
   const double y_min = std::min(y0, y1), y_max = std::max(y0, y1);
-  const int last_column = static_cast<int>(std::ceil(x1)) - 1;
+  const int last_column = ceil_to_int(x1) - 1;
   const std::ptrdiff_t stride = stride_;
   int x = static_cast<int>(x0);
   Cell* cells = column(x) - row_begin_;  // indexed by the row

@@ -23,4 +23,17 @@ struct Plane {
   double signed_distance(const Vec3& p) const { return glm::dot(normal, p) + d; }
 };
 
+// The smallest integer >= v, for |v| < 2^31: the cast truncates toward zero, which is the ceiling for v <= 0 and
+// the floor for v > 0. Cheaper than std::ceil and a cast where the compiler may not use SSE4.1's rounding.
+inline int ceil_to_int(double v) {
+  const int t = static_cast<int>(v);
+  return t + (static_cast<double>(t) < v);
+}
+
+// The largest integer <= v, for |v| < 2^31.
+inline int floor_to_int(double v) {
+  const int t = static_cast<int>(v);
+  return t - (static_cast<double>(t) > v);
+}
+
 }  // namespace aarad

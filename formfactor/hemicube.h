@@ -41,8 +41,8 @@ void sample_polygon(std::span<const Vec2> polygon, int column_begin, int column_
     ymin = std::min(ymin, p.y);
     ymax = std::max(ymax, p.y);
   }
-  const int row_lo = std::max(0, static_cast<int>(std::floor(ymin - 0.5)));
-  const int row_hi = std::min(height - 1, static_cast<int>(std::floor(ymax)));
+  const int row_lo = std::max(0, floor_to_int(ymin - 0.5));
+  const int row_hi = std::min(height - 1, floor_to_int(ymax));
   for (int row = row_lo; row <= row_hi; ++row) {
     const double yc = sample_y(row);
     if (yc < ymin || yc >= ymax) continue;
@@ -69,8 +69,8 @@ void sample_polygon(std::span<const Vec2> polygon, int column_begin, int column_
       winding += crossings[k].direction;
       if (winding == 0) continue;
       // Columns whose centre c + 1/2 lies in [x_k, x_{k+1}); x - 1/2 is exact for |x| < 2^52.
-      const int c0 = std::max(column_begin, static_cast<int>(std::ceil(crossings[k].x - 0.5)));
-      const int c1 = std::min(column_end, static_cast<int>(std::ceil(crossings[k + 1].x - 0.5)));
+      const int c0 = std::max(column_begin, ceil_to_int(crossings[k].x - 0.5));
+      const int c1 = std::min(column_end, ceil_to_int(crossings[k + 1].x - 0.5));
       for (int c = c0; c < c1; ++c) visit(c, row);
     }
   }

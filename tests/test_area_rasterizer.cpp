@@ -536,8 +536,8 @@ TEST(AreaRasterizerDegenerate, raster_zero_area_input_visits_nothing) {
       {{2.5, 0.3}, {2.5, 7.1}, {2.5, 3.0}},              // collinear vertical
       {{3, 3}, {3, 3}, {3, 3}},                          // one point
       {{1, 1}, {4, 5}},                                  // two vertices
-      // Exactly collinear (x, y) = p + k (A, B) 2^-48 for k = 0, 1, 3, yet the double shoelace sum
-      // x_a y_b - x_b y_a + ... rounds to -8.9e-16: only the exact fallback finds zero.
+      // Exactly collinear (x, y) = p + k (A, B) 2^-48 for k = 0, 1, 3: the double shoelace sum taken about the
+      // origin, x_a y_b - x_b y_a + ..., rounds to -8.9e-16 (about the first vertex it is 0).
       {{0x1.96aa3cf924580p+1, 0x1.daf9268ecc450p+0},
        {0x1.a05e8e3c41980p+1, 0x1.0671563f003b0p+1},
        {0x1.b3c730c27c180p+1, 0x1.385adc2e346c0p+1}}};
@@ -546,6 +546,31 @@ TEST(AreaRasterizerDegenerate, raster_zero_area_input_visits_nothing) {
     EXPECT_EQ(got.visits, 0) << i;
     EXPECT_EQ(got.result.winding, Winding::kDegenerate) << i;
     EXPECT_EQ(got.result.signed_area, 0.0) << i;
+  }
+}
+
+// Thin triangles whose shoelace sum in doubles, taken about the first vertex as the rasterizer takes it, has the
+// wrong sign (+1.4e-14 and -7.1e-15 against exact areas of the other sign): the rounding bound sends them to the
+// exact sum, and they are scan-converted with their true winding.
+TEST(AreaRasterizerDegenerate, raster_nearly_collinear_triangles_get_their_exact_winding) {
+  AreaRasterizer rasterizer(32, 32);
+  const std::vector<std::vector<Vec2>> thin{
+      {{0x1.d96dc484de346p+2, 0x1.555bc6ad66a69p+2},
+       {-0x1.cd90c9427f38cp+2, 0x1.d2bb9e3f4ca78p+3},
+       {-0x1.39a9c312250d0p+2, 0x1.a3e6ca7031a93p+3}},
+      {{0x1.2a81e90278426p+2, 0x1.873d772abe593p+1},
+       {0x1.29075bb29ccb0p+4, -0x1.69ab76ce304c7p+4},
+       {0x1.8b6e03476d9bap+2, 0x1.0b141a9619898p-2}}};
+  for (std::size_t i = 0; i < thin.size(); ++i) {
+    const std::vector<Vec2>& t = thin[i];
+    const Vec2 d1 = t[1] - t[0], d2 = t[2] - t[0];
+    const double rounded = d1.x * d2.y - d2.x * d1.y;
+    const Winding exact = exact_winding(t);
+    ASSERT_NE(exact, Winding::kDegenerate) << i;
+    ASSERT_EQ(rounded > 0.0, exact == Winding::kClockwise) << i;  // the doubles alone get it wrong
+    const Rasterized got = run(rasterizer, t);
+    EXPECT_EQ(got.result.winding, exact) << i;
+    EXPECT_EQ(got.result.signed_area > 0.0, exact == Winding::kCounterClockwise) << i;
   }
 }
 
