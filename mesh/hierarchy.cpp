@@ -389,7 +389,14 @@ std::vector<NodeId> Hierarchy::leaves() const {
 std::size_t Hierarchy::leaf_count() const { return impl_->leaf_count; }
 
 std::vector<NodeId> Hierarchy::leaves_under(NodeId node) const {
-  std::vector<NodeId> out, stack{node};
+  std::vector<NodeId> out, stack;
+  leaves_under(node, out, stack);
+  return out;
+}
+
+void Hierarchy::leaves_under(NodeId node, std::vector<NodeId>& out, std::vector<NodeId>& stack) const {
+  const std::size_t first = out.size();
+  stack.assign(1, node);
   while (!stack.empty()) {
     const NodeId n = stack.back();
     stack.pop_back();
@@ -400,8 +407,7 @@ std::vector<NodeId> Hierarchy::leaves_under(NodeId node) const {
     const auto c = children(n);
     stack.insert(stack.end(), c.rbegin(), c.rend());
   }
-  std::sort(out.begin(), out.end());
-  return out;
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
 }
 
 std::uint64_t Hierarchy::revision() const { return impl_->revision; }

@@ -110,8 +110,10 @@ class Hierarchy {
   // Leaves in a deterministic order (by node id). leaf_count() is O(1).
   std::vector<NodeId> leaves() const;
   std::size_t leaf_count() const;
-  // Leaves below `node` (the node itself when it is a leaf).
+  // Leaves below `node` (the node itself when it is a leaf), by node id.
   std::vector<NodeId> leaves_under(NodeId node) const;
+  // The same, appended to `out`; `stack` is scratch. Allocates nothing once both have grown.
+  void leaves_under(NodeId node, std::vector<NodeId>& out, std::vector<NodeId>& stack) const;
 
   // Increases whenever the leaf set changes, so callers can cache views of the leaves.
   std::uint64_t revision() const;

@@ -386,7 +386,9 @@ std::span<const std::uint32_t> Solver::factors_from_row(const FactorRow& row, bo
     received_factor_[node] = row.factors[k];
     factor_written_.push_back(node);
     split_entries_.push_back(k);
-    for (mesh::NodeId leaf : hierarchy_.leaves_under(node)) subset_.push_back(cache_.receiver(leaf));
+    split_leaves_.clear();
+    hierarchy_.leaves_under(node, split_leaves_, leaf_stack_);
+    for (const mesh::NodeId leaf : split_leaves_) subset_.push_back(cache_.receiver(leaf));
   }
   std::sort(subset_.begin(), subset_.end());
   if (unoccluded) {
@@ -439,18 +441,23 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
 // leaves that stayed are what the shot gave them; each split leaf's entry gives way to its pieces that got a factor
 // (the first takes its place, the others fill entries none of whose pieces got one, then go at the end); entries left
 // empty are removed by moving the last entry into them. factors_from_row writes each entry to its own leaf, so their
-// order does not matter. The row grows to its exact size, as keep_row sizes it: the memory budget counts capacity.
+// order does not matter. A row that outgrows its memory gets a quarter more than it needs (the memory budget counts
+// capacity, so that headroom is paid for).
 // A split leaf's pieces are near-field candidates exactly when it was one (candidates go by patch).
 void Solver::update_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
   FactorRow row = factor_cache_.take(shooter);
   const auto near = [&](std::uint32_t i) { return kept_near(i, candidates); };
-  std::vector<std::size_t> vacant;
-  std::vector<std::pair<mesh::NodeId, double>> extra;
+  std::vector<std::size_t>& vacant = row_vacant_;
+  std::vector<std::pair<mesh::NodeId, double>>& extra = row_extra_;
+  vacant.clear();
+  extra.clear();
   // Replaces entry k of (nodes, values), a split leaf's, by its pieces for which wanted(i); value(i) is their value.
   const auto replace = [&](std::vector<mesh::NodeId>& nodes, std::vector<double>& values, std::size_t k,
                            auto&& wanted, auto&& value) {
     bool placed = false;
-    for (const mesh::NodeId leaf : hierarchy_.leaves_under(nodes[k])) {
+    row_leaves_.clear();
+    hierarchy_.leaves_under(nodes[k], row_leaves_, row_stack_);
+    for (const mesh::NodeId leaf : row_leaves_) {
       const std::uint32_t i = cache_.receiver(leaf);
       if (!wanted(i)) continue;
       if (!placed) {
@@ -469,8 +476,10 @@ void Solver::update_row(mesh::NodeId shooter, std::span<const std::uint8_t> cand
     for (; !vacant.empty() && !extra.empty(); vacant.pop_back(), extra.pop_back())
       std::tie(nodes[vacant.back()], values[vacant.back()]) = extra.back();
     if (nodes.capacity() < nodes.size() + extra.size()) {
-      nodes.reserve(nodes.size() + extra.size());
-      values.reserve(values.size() + extra.size());
+      // A quarter more than needed: a row grows a little at most of its updates, and each exact fit moved it whole.
+      const std::size_t needed = nodes.size() + extra.size();
+      nodes.reserve(needed + needed / 4);
+      values.reserve(needed + needed / 4);
     }
     for (const auto& [node, value] : extra) {
       nodes.push_back(node);

@@ -265,6 +265,7 @@ class Solver {
   std::size_t touched_count_ = 0;
   std::vector<std::uint32_t> subset_;
   std::vector<std::size_t> split_entries_;  // factors_from_row: the row's entries of leaves split since
+  std::vector<mesh::NodeId> split_leaves_, leaf_stack_;  // factors_from_row: scratch for leaves_under
   // Per receiver: edge-neighbours (receiver indices).
   NeighbourTable neighbours_;
   // Per receiver, valid for revision deposits_revision_: what a shot needs to deposit flux on it besides its
@@ -304,6 +305,10 @@ class Solver {
   // ff_ takes the near-field correction. A reused shot also lists its near-field candidates on row_task_ while it
   // reads its row (and waits for them there).
   std::vector<double> row_ff_;
+  // update_row's scratch, on row_task_: leaves_under's, the entries left vacant, the pieces placed after them.
+  std::vector<mesh::NodeId> row_leaves_, row_stack_;
+  std::vector<std::size_t> row_vacant_;
+  std::vector<std::pair<mesh::NodeId, double>> row_extra_;
   std::unique_ptr<tbb::task_group> row_task_ = std::make_unique<tbb::task_group>();
   bool row_pending_ = false;
   // Waits for the row task, if one runs: before anything it reads changes (the leaves, the factor cache).
