@@ -625,6 +625,12 @@ TEST(Hierarchy, LeavesUnderAndMemory) {
   std::sort(children.begin(), children.end());
   EXPECT_EQ(under, children);
   EXPECT_EQ(h.leaves_under(h.patches()[0]).size(), 7u);
+  // Appended after what `out` holds, sorted among themselves; the scratch stack may hold anything.
+  std::vector<NodeId> out{999, 5}, stack{1, 2, 3};
+  h.leaves_under(e, out, stack);
+  std::vector<NodeId> expected{999, 5};
+  expected.insert(expected.end(), children.begin(), children.end());
+  EXPECT_EQ(out, expected);
   EXPECT_GT(h.memory_bytes(), 0u);
 }
 
