@@ -29,7 +29,9 @@ constexpr int kMaxSide = 1 << 15;
 // bound, otherwise it is redone in exact rationals. Each term d_a.x d_b.y - d_b.x d_a.y, d = p - first vertex,
 // has its products within 3 eps (two differences and a product) and its difference within eps of the
 // magnitudes |d_a.x d_b.y| + |d_b.x d_a.y|; adding n terms adds at most n eps of them: (n + 4) eps in all, to first
-// order, taken generously as (2n + 8) eps. Returns the sign and, in `twice_area`, the best double value.
+// order, taken generously as (2n + 8) eps. A product that underflows is off by up to half the smallest subnormal
+// besides (differences and sums that underflow are exact); for the 2n products the bound adds 2n smallest
+// subnormals, twice that. Returns the sign and, in `twice_area`, the best double value.
 int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
   const std::size_t n = polygon.size();
   const Vec2 origin = polygon[0];
@@ -44,7 +46,8 @@ int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
   }
   twice_area = sum;
   if (!std::isfinite(magnitude)) return 0;  // a non-finite coordinate, or one so large products overflow
-  const double bound = static_cast<double>(2 * n + 8) * std::numeric_limits<double>::epsilon() * magnitude;
+  const double bound = static_cast<double>(2 * n + 8) * std::numeric_limits<double>::epsilon() * magnitude +
+                       static_cast<double>(2 * n) * std::numeric_limits<double>::denorm_min();
   if (sum > bound) return 1;
   if (sum < -bound) return -1;
   using Q = CGAL::Exact_rational;

@@ -549,10 +549,12 @@ TEST(AreaRasterizerDegenerate, raster_zero_area_input_visits_nothing) {
   }
 }
 
-// Thin triangles whose shoelace sum in doubles, taken about the first vertex as the rasterizer takes it, has the
-// wrong sign (+1.4e-14 and -7.1e-15 against exact areas of the other sign): the rounding bound sends them to the
-// exact sum, and they are scan-converted with their true winding.
-TEST(AreaRasterizerDegenerate, raster_nearly_collinear_triangles_get_their_exact_winding) {
+// Polygons whose shoelace sum in doubles, taken about the first vertex as the rasterizer takes it, has the wrong
+// sign: two thin triangles (+1.4e-14 and -7.1e-15 against exact areas of the other sign), which the rounding bound
+// sends to the exact sum, and a pentagon 2^-536 across whose products underflow (the sum is -5e-324, the smallest
+// subnormal, against a positive exact area), which only the bound's allowance for underflow sends there. All are
+// scan-converted with their true winding.
+TEST(AreaRasterizerDegenerate, raster_polygons_with_a_wrong_double_sign_get_their_exact_winding) {
   AreaRasterizer rasterizer(32, 32);
   const std::vector<std::vector<Vec2>> thin{
       {{0x1.d96dc484de346p+2, 0x1.555bc6ad66a69p+2},
@@ -560,17 +562,30 @@ TEST(AreaRasterizerDegenerate, raster_nearly_collinear_triangles_get_their_exact
        {-0x1.39a9c312250d0p+2, 0x1.a3e6ca7031a93p+3}},
       {{0x1.2a81e90278426p+2, 0x1.873d772abe593p+1},
        {0x1.29075bb29ccb0p+4, -0x1.69ab76ce304c7p+4},
-       {0x1.8b6e03476d9bap+2, 0x1.0b141a9619898p-2}}};
+       {0x1.8b6e03476d9bap+2, 0x1.0b141a9619898p-2}},
+      {{0x1.4p-536, -0x1.ep-536},
+       {0x1.ep-536, 0x1.8p-535},
+       {-0x1.cp-537, -0x1.ep-535},
+       {-0x1.0p-536, -0x1.0p-537},
+       {0x1.8p-536, -0x1.2p-536}}};
   for (std::size_t i = 0; i < thin.size(); ++i) {
-    const std::vector<Vec2>& t = thin[i];
-    const Vec2 d1 = t[1] - t[0], d2 = t[2] - t[0];
-    const double rounded = d1.x * d2.y - d2.x * d1.y;
-    const Winding exact = exact_winding(t);
+    const std::vector<Vec2>& polygon = thin[i];
+    double rounded = 0.0;
+    for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
+      const Vec2 a = polygon[k] - polygon[0], b = polygon[k + 1] - polygon[0];
+      rounded += a.x * b.y - b.x * a.y;
+    }
+    const Winding exact = exact_winding(polygon);
     ASSERT_NE(exact, Winding::kDegenerate) << i;
+    ASSERT_NE(rounded, 0.0) << i;
     ASSERT_EQ(rounded > 0.0, exact == Winding::kClockwise) << i;  // the doubles alone get it wrong
-    const Rasterized got = run(rasterizer, t);
+    const Rasterized got = run(rasterizer, polygon);
     EXPECT_EQ(got.result.winding, exact) << i;
-    EXPECT_EQ(got.result.signed_area > 0.0, exact == Winding::kCounterClockwise) << i;
+    // Never of the wrong sign (half of the pentagon's exact sum underflows to 0).
+    EXPECT_GE(exact == Winding::kCounterClockwise ? got.result.signed_area : -got.result.signed_area, 0.0) << i;
+    if (i < 2) {
+      EXPECT_NE(got.result.signed_area, 0.0) << i;
+    }
   }
 }
 
