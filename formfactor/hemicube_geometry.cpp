@@ -556,25 +556,17 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   std::fill(face_mask_.begin(), face_mask_.end(), FaceMask{0});
   task_bits_.assign(count, 0);
   point_wanted_.assign(points.size(), 0);
-  // Lists receiver i's points that no receiver listed before it (wanted_points_), and transforms the listed ones.
-  wanted_points_.clear();
-  const auto want_points = [&](std::size_t i) {
+  // Transforms receiver i's points that no receiver claimed before it. Called from several threads at once: a point
+  // shared by receivers on two threads is claimed by one of them (its point_wanted_ byte, exchanged atomically) and
+  // transformed once, and a transform depends on the point alone, so the result is the same whoever claims it. The
+  // receivers' outcodes are combined (prepare_receiver) only after every claimed point is transformed.
+  const auto transform_points = [&](std::uint32_t i) {
     for (std::size_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
       const std::uint32_t p = corner_points_[v];
-      if (point_wanted_[p] != 0) continue;
-      point_wanted_[p] = 1;
-      wanted_points_.push_back(p);
+      std::atomic_ref<std::uint8_t> wanted(point_wanted_[p]);
+      if (wanted.load(std::memory_order_relaxed) == 0 && wanted.exchange(1, std::memory_order_relaxed) == 0)
+        prepare_point(p, points[p]);
     }
-  };
-  const auto transform_wanted = [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, wanted_points_.size(), 1024),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t k = range.begin(); k != range.end(); ++k) {
-                          const std::uint32_t p = wanted_points_[k];
-                          prepare_point(p, points[p]);
-                        }
-                      });
-    wanted_points_.clear();
   };
 
   // The subset's receivers go on every list their faces allow, as after prepare(); each prepared once (listed_),
@@ -584,9 +576,11 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
     if (task_bits_[i] == kInSubset) continue;
     task_bits_[i] = kInSubset;
     listed_.push_back(i);
-    want_points(i);
   }
-  transform_wanted();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, listed_.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) transform_points(listed_[k]);
+                    });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, listed_.size(), 256),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t k = range.begin(); k != range.end(); ++k) prepare_receiver(listed_[k]);
@@ -663,21 +657,29 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
   // Their receivers, and the points of those; every receiver on a list, in order (task_receivers). Found through
   // the patches, marked in a bitmap of receivers and read back from it in order: a few thousand receivers of a
   // scene of tens of thousands, without a pass over all of them.
+  // The patches reached are listed first: they lie in few runs of slots (slots follow the patches' places), which
+  // would leave a parallel loop over all slots with its work in one or two pieces. Each receiver belongs to one patch,
+  // so only its points (transform_points) and its word of the bitmap (an atomic OR) are shared between threads.
   listed_bits_.assign((count + 63) / 64, 0);
-  const auto mark_listed = [&](std::uint32_t i) { listed_bits_[i / 64] |= std::uint64_t{1} << (i % 64); };
-  for (const std::uint32_t i : listed_) mark_listed(i);
-  for (std::size_t slot = 0; slot < slots; ++slot) {
-    if (slot_bits_[slot] == 0) continue;
-    const std::uint32_t p = slot_patch_[slot];
-    for (std::uint32_t k = patch_first_[p]; k < patch_first_[p + 1]; ++k) {
-      const std::uint32_t i = patch_receivers_[k];
-      if (task_bits_[i] != 0) continue;  // in the subset
-      task_bits_[i] = slot_bits_[slot];
-      want_points(i);
-      mark_listed(i);
+  for (const std::uint32_t i : listed_) listed_bits_[i / 64] |= std::uint64_t{1} << (i % 64);
+  reached_slots_.clear();
+  for (std::size_t slot = 0; slot < slots; ++slot)
+    if (slot_bits_[slot] != 0) reached_slots_.push_back(static_cast<std::uint32_t>(slot));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, reached_slots_.size(), 8),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t r = range.begin(); r != range.end(); ++r) {
+      const std::uint32_t slot = reached_slots_[r];
+      const std::uint32_t p = slot_patch_[slot];
+      for (std::uint32_t k = patch_first_[p]; k < patch_first_[p + 1]; ++k) {
+        const std::uint32_t i = patch_receivers_[k];
+        if (task_bits_[i] != 0) continue;  // in the subset
+        task_bits_[i] = slot_bits_[slot];
+        transform_points(i);
+        std::atomic_ref<std::uint64_t>(listed_bits_[i / 64]).fetch_or(std::uint64_t{1} << (i % 64),
+                                                                      std::memory_order_relaxed);
+      }
     }
-  }
-  transform_wanted();
+  });
   listed_.clear();
   for (std::size_t w = 0; w < listed_bits_.size(); ++w)
     for (std::uint64_t bits = listed_bits_[w]; bits != 0; bits &= bits - 1)

@@ -527,8 +527,8 @@ class PreparedReceivers {
   std::vector<PatchBox> cluster_boxes_, group_boxes_;
   std::vector<std::uint32_t> patch_first_;        // per patch id: its receivers are patch_receivers_[first, next)
   std::vector<std::uint32_t> patch_receivers_;
-  std::vector<std::uint8_t> point_wanted_;    // per point, in prepare_subset: 1 once a listed receiver has it
-  std::vector<std::uint32_t> wanted_points_;  // those points, until transformed
+  std::vector<std::uint8_t> point_wanted_;    // per point, in prepare_subset: 1 once a listed receiver claimed it
+  std::vector<std::uint32_t> reached_slots_;  // in prepare_subset: the slots of the patches that may reach a tile
   std::vector<std::uint32_t> listed_;         // the receivers prepare_subset may put on a list, in order
   std::vector<std::uint64_t> listed_bits_;    // bit i % 64 of word i / 64: receiver i is listed
 };
