@@ -656,10 +656,10 @@ void PreparedReceivers::prepare_subset(const Shooter& shooter, const ReceiverVie
 
   // Their receivers, and the points of those; every receiver on a list, in order (task_receivers). Found through
   // the patches, marked in a bitmap of receivers and read back from it in order: a few thousand receivers of a
-  // scene of tens of thousands, without a pass over all of them.
-  // The patches reached are listed first: they lie in few runs of slots (slots follow the patches' places), which
-  // would leave a parallel loop over all slots with its work in one or two pieces. Each receiver belongs to one patch,
-  // so only its points (transform_points) and its word of the bitmap (an atomic OR) are shared between threads.
+  // scene of tens of thousands, without a pass over all of them. In parallel over the patches reached, listed first:
+  // they lie in few runs of slots (slots follow the patches' places), which would leave a parallel loop over all
+  // slots with its work in one or two pieces. Each receiver belongs to one patch, so only its points
+  // (transform_points) and its word of the bitmap (an atomic OR) are shared between threads.
   listed_bits_.assign((count + 63) / 64, 0);
   for (const std::uint32_t i : listed_) listed_bits_[i / 64] |= std::uint64_t{1} << (i % 64);
   reached_slots_.clear();
