@@ -552,8 +552,8 @@ TEST(AreaRasterizerDegenerate, raster_zero_area_input_visits_nothing) {
 // Polygons whose shoelace sum in doubles, taken about the first vertex as the rasterizer takes it, has the wrong
 // sign: two thin triangles (+1.4e-14 and -7.1e-15 against exact areas of the other sign), which the rounding bound
 // sends to the exact sum, and a pentagon 2^-536 across whose products underflow (the sum is -5e-324, the smallest
-// subnormal, against a positive exact area), which only the bound's allowance for underflow sends there. All are
-// scan-converted with their true winding.
+// subnormal, against a positive exact area), which only the floor below which products may underflow sends there
+// (a relative bound alone is zero there). All are scan-converted with their true winding.
 TEST(AreaRasterizerDegenerate, raster_polygons_with_a_wrong_double_sign_get_their_exact_winding) {
   AreaRasterizer rasterizer(32, 32);
   const std::vector<std::vector<Vec2>> thin{
