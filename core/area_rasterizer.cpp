@@ -33,9 +33,9 @@ constexpr int kMaxSide = 1 << 15;
 // order, taken generously as (2n + 8) eps. A product that underflows is off by up to half the smallest subnormal
 // besides (differences and sums that underflow are exact), an error no relative bound covers: below
 // kPredicateFilterFloor, as the predicates do (core/predicates.h), the exact sum decides. Above it the generous
-// half of the bound holds those 2n halves many times over. (Adding 2n smallest subnormals to the bound instead made
-// every call multiply a subnormal, which took a third of traverse_edges' time.) Returns the sign and, in
-// `twice_area`, the best double value.
+// half of the bound holds those 2n halves many times over. (Adding 2n smallest subnormals to the bound instead had
+// every call make and multiply a subnormal at run time, as GCC folds no constant that underflows: a third of
+// traverse_edges' samples.) Returns the sign and, in `twice_area`, the best double value.
 int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
   const std::size_t n = polygon.size();
   const Vec2 origin = polygon[0];
