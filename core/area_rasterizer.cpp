@@ -32,8 +32,8 @@ constexpr int kMaxSide = 1 << 15;
 // magnitudes |d_a.x d_b.y| + |d_b.x d_a.y|; adding n terms adds at most n eps of them: (n + 4) eps in all, to first
 // order, taken generously as (2n + 8) eps. A product that underflows is off by up to half the smallest subnormal
 // besides (differences and sums that underflow are exact), an error no relative bound covers: below
-// kPredicateFilterFloor, as the predicates do (core/predicates.h), the exact sum decides. Above it the generous
-// half of the bound holds those 2n halves many times over. (Adding 2n smallest subnormals to the bound instead had
+// kPredicateFilterFloor, as the predicates do (core/predicates.h), the exact sum decides. Above it the margin taken
+// beyond (n + 4) eps covers those 2n halves many times over. (Adding 2n smallest subnormals to the bound instead had
 // every call make and multiply a subnormal at run time, as GCC folds no constant that underflows: a third of
 // traverse_edges' samples.) Returns the sign and, in `twice_area`, the best double value.
 int exact_orientation(std::span<const Vec2> polygon, double& twice_area) {
