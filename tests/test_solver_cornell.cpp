@@ -1,6 +1,7 @@
 // The Cornell box solved with the AA hemicube at N = 100 and adaptive substructuring (issue 5): it converges,
-// gives the same numbers with 1 and 2 threads, passes check_invariants, and the adaptive mesh is finer along
-// the blocks' shadow edges on the floor than in the middle of the back wall.
+// gives the same numbers with 1 and 2 threads, passes check_invariants, leaves no pair of leaves too steep that
+// could still be split after any shot, and the adaptive mesh is finer along the blocks' shadow edges on the floor
+// than in the middle of the back wall.
 #include "core/builtin_scenes.h"
 #include "mesh/invariants.h"
 #include "refine/solver.h"
@@ -9,6 +10,7 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -80,6 +82,42 @@ TEST(SolverCornell, InvariantsHoldAfterTheSolve) {
   const std::vector<mesh::Violation> violations = mesh::check_invariants(one_thread().solver->hierarchy());
   for (const mesh::Violation& v : violations) ADD_FAILURE() << v.invariant << ": " << v.message;
   EXPECT_TRUE(violations.empty());
+}
+
+// The gradient test's postcondition, shot after shot: where two edge-neighbour leaves differ in luminance by more
+// than --gradient times the largest reflected luminance (B - E) of any leaf, neither can be split any more. The
+// solver tests only the leaves a shot reached, against luminances it keeps up to date beside the deposits; this
+// recomputes them all from the leaves' radiosities.
+TEST(SolverCornell, NoLeafThatCouldSplitIsLeftTooSteepAfterAShot) {
+  SolverOptions options;
+  options.meshing = default_meshing(cornell());
+  options.gradient = 0.05;  // half the default: more pairs near the threshold
+  Solver solver(cornell(), options);
+  const mesh::Hierarchy& hierarchy = solver.hierarchy();
+  std::size_t steep_pairs = 0;
+  for (int shot = 1; shot <= 300; ++shot) {
+    ASSERT_TRUE(solver.shoot_once());
+    const std::vector<mesh::NodeId> leaves = hierarchy.leaves();
+    double largest = 0.0;
+    for (mesh::NodeId leaf : leaves) {
+      const Rgb& emission = cornell().material_of_surface(hierarchy.surface(leaf)).emission;
+      largest = std::max(largest, (hierarchy.radiosity(leaf) - emission).luminance());
+    }
+    const double threshold = options.gradient * largest;
+    for (mesh::NodeId leaf : leaves) {
+      for (mesh::NodeId neighbour : hierarchy.edge_neighbours(leaf)) {
+        const double step =
+            std::abs(hierarchy.radiosity(leaf).luminance() - hierarchy.radiosity(neighbour).luminance());
+        if (leaf > neighbour || !(step > threshold)) continue;
+        ++steep_pairs;
+        ASSERT_FALSE(hierarchy.can_split(leaf) || hierarchy.can_split(neighbour))
+            << "after shot " << shot << ": leaves " << leaf << " and " << neighbour << " differ by " << step
+            << " > " << threshold;
+      }
+    }
+  }
+  // Pairs at the deepest level along the lights' and the blocks' edges stay steep: the check had pairs to check.
+  EXPECT_GT(steep_pairs, 0u);
 }
 
 TEST(SolverCornell, MeshIsFinerAlongShadowEdgesThanInTheBackWallMiddle) {
