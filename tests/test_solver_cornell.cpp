@@ -116,7 +116,7 @@ TEST(SolverCornell, NoLeafThatCouldSplitIsLeftTooSteepAfterAShot) {
       }
     }
   }
-  // Pairs at the deepest level along the lights' and the blocks' edges stay steep: the check had pairs to check.
+  // Some pairs stay steep where neither leaf can split any more: the check had pairs to check.
   EXPECT_GT(steep_pairs, 0u);
 }
 
