@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= 2
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build demo test bench clean
+.PHONY: all deps configure build demo test bench-build bench goals clean
 
 all: build
 
@@ -22,10 +22,15 @@ demo: build
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
-bench: deps
+bench-build: deps
 	@cmake -S . -B $(BUILD)-bench -DCMAKE_BUILD_TYPE=Release -DAARAD_BUILD_TESTS=OFF -DAARAD_BUILD_BENCH=ON > /dev/null
 	@cmake --build $(BUILD)-bench -j$(JOBS)
+
+bench: bench-build
 	@bash bench/run.sh $(BUILD)-bench
+
+goals: bench-build
+	@bash bench/goals.sh $(BUILD)-bench
 
 clean:
 	@rm -rf $(BUILD) $(BUILD)-bench
