@@ -35,6 +35,8 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const HemicubeFace face = t.face;
   // The task's viewport: columns [t.x0, t.x1) of the face, shifted to start at 0.
   const int width = t.x1 - t.x0, height = geometry_.height(face);
+  unoccluded.clear();
+  if (width == 0) return;  // below N = 4 the top face's quarter tasks have no columns (face_tasks)
   const double half = 0.5 * geometry_.resolution(), shift = t.x0;
   // One rasterizer per thread, set to this task's viewport (one per task and thread took 48 N^2 bytes a thread:
   // 3.2 GB at N = 8192).
@@ -53,7 +55,6 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   const double* weight =
       column_weight_[face == HemicubeFace::kTop ? 0 : 1].data() + static_cast<std::size_t>(t.x0) * height;
   const auto column_height = static_cast<std::size_t>(height);
-  unoccluded.clear();
 
   // Receiver i clipped and projected into b.projected, with its box; 0 vertices when it is degenerate or has nothing
   // in this task's columns.

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <numeric>
 #include <set>
 #include <stdexcept>
@@ -474,12 +475,12 @@ double box_sum(FormFactorBackend& backend, const Shooter& s, const ReceiverView&
   return std::accumulate(f.begin(), f.end(), 0.0);
 }
 
-// From every shooter inside a closed scene, at N = 50, 100 and 151: the classical hemicube's form factors sum to
+// From every shooter inside a closed scene, at each of `resolutions`: the classical hemicube's form factors sum to
 // 1 within 1e-12 (every pixel sample belongs to exactly one receiver and the exact delta form factors sum to 1);
 // the AA hemicube's never exceed 1 and sum to 1 within `aa_tolerance`.
 void expect_closed_sums(const ReceiverView& view, const std::vector<Shooter>& shooters, double aa_tolerance,
-                        const char* label) {
-  for (int n : {50, 100, 151}) {
+                        const char* label, std::initializer_list<int> resolutions = {50, 100, 151}) {
+  for (int n : resolutions) {
     HemicubeBackend classical(n);
     AaHemicubeBackend aa(n);
     for (const Shooter& s : shooters) {
@@ -504,6 +505,19 @@ TEST(HemicubeAccuracy, ClosedBoxSumsToOne) {
   // layer and share the pixel side by side (coverage_list.h); the paper's plain E = A (1 - f) would lose
   // A_front A_back there (section 3.2.5), 0.2-0.8 % of the hemisphere at these resolutions.
   expect_closed_sums(view, shooters, 1e-12, "box");
+}
+
+// The smallest resolutions the back ends accept. Below N = 4 the top face's quarter tasks have no columns, and the
+// AA hemicube threw when it gave one of them a rasterizer (`aarad formfactors cornell --from light --resolution 3`:
+// "viewport 0 x 3 is out of range").
+TEST(HemicubeAccuracy, ClosedBoxSumsToOneAtTheSmallestResolutions) {
+  ReceiverView view;
+  add_box(view, Vec3(0), Vec3(1.0, 1.3, 0.9), 3);
+  const std::vector<Shooter> shooters = {
+      Shooter::from_normal({0.5, 0.65, 0.0}, {0, 0, 1}),
+      rotated_shooter({0.31, 0.72, 0.4}, glm::normalize(Vec3(0.4, -0.3, 1.0)), 0.5),
+  };
+  expect_closed_sums(view, shooters, 1e-12, "small box", {2, 3, 4, 5, 6, 7});
 }
 
 // The same box with one wall a rounding error inside the others' ends, as files written in single precision (what
