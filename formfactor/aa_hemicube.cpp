@@ -82,6 +82,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
     const std::uint32_t receiver = i;
     const std::uint32_t surface = receivers.surface(i);
+    const InverseDepthRange surface_range = prepared_.surface_inverse_depths(i, face);
     // The entry's depth range in a pixel (coverage_list.h, "Layers"): the key is 1/depth of the receiver's plane
     // at one point of the pixel's closed square (its centre, or the corner nearest the shooter; docs/form-factors.md,
     // "Depth kept per receiver and pixel") and 1/depth is affine, so over the pixel it stays within |alpha| +
@@ -113,6 +114,13 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
         inverse_depth += 0.5 * reach;
         if (!(inverse_depth > 0.0)) inverse_depth = 0.0;
       }
+      // Kept within the 1/depth the receiver's surface can have on this face (the range over its box): where the
+      // receiver covers part of the pixel and its plane runs nearly through the shooter, the centre's ray meets the
+      // plane far beyond the receiver, and that value put a card seen edge-on behind the floor behind it
+      // (docs/form-factors.md). The range is the surface's, so the pieces of one surface still share one key per
+      // pixel; and it holds every 1/depth the receiver has in the pixel, so the key only moves towards those and
+      // stays within the spread of each.
+      inverse_depth = std::min(std::max(inverse_depth, surface_range.lo), surface_range.hi);
       // Key -1/depth orders like the depth without a division.
       ++offered;
       arena.insert(x, y, CoverageEntry{-inverse_depth, coverage, receiver, surface, spread});

@@ -273,6 +273,77 @@ void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receiv
   // Each patch is decided when asked: by its receivers as prepare() prepares them, in parallel, or as
   // prepare_subset() tests the few patches it looks at.
   culling_.decide_when_asked(shooter.centre, receivers);
+  // Each surface's range of 1 / a on each face, from its box: a is linear, so over the box it lies within the
+  // value at the box's centre plus or minus the half extents weighed by the face axis' absolute components. The
+  // ranges are widened by 1e-12 of their magnitude, for the rounding of the box's centre and of the dot products.
+  find_surface_boxes(receivers);
+  surface_ranges_.resize(surface_boxes_.size() * kHemicubeFaces);
+  for (std::size_t slot = 0; slot < surface_boxes_.size(); ++slot) {
+    const auto& [lo, hi] = surface_boxes_[slot];
+    const Vec3 centre = 0.5 * (lo + hi) - shooter.centre, half = 0.5 * (hi - lo);
+    // Centre and half width of (u, v, w) over the box.
+    const Vec3 mid{glm::dot(shooter.tangent, centre), glm::dot(shooter.bitangent, centre),
+                   glm::dot(shooter.normal, centre)};
+    Vec3 reach{glm::dot(glm::abs(shooter.tangent), half), glm::dot(glm::abs(shooter.bitangent), half),
+               glm::dot(glm::abs(shooter.normal), half)};
+    reach += 1e-12 * (glm::abs(mid) + reach);
+    for (int f = 0; f < kHemicubeFaces; ++f) {
+      const auto face = static_cast<HemicubeFace>(f);
+      // The face's axis a is one of +-u, +-v, +w (to_face).
+      const double a_mid = to_face(face, mid).x, a_reach = to_face(face, reach).x;
+      const double a_lo = a_mid - std::abs(a_reach), a_hi = a_mid + std::abs(a_reach);
+      surface_ranges_[slot * kHemicubeFaces + static_cast<std::size_t>(f)] = {
+          a_hi > 0.0 ? 1.0 / a_hi : 0.0, a_lo > 0.0 ? 1.0 / a_lo : std::numeric_limits<double>::infinity()};
+    }
+  }
+}
+
+void PreparedReceivers::find_surface_boxes(const ReceiverView& receivers) {
+  const std::size_t count = receivers.size();
+  if (surfaces_revision_ == receivers.revision() && surfaces_size_ == count) return;
+  // A refinement of the view the boxes were found for keeps them: its receivers lie in the convex hulls of that
+  // view's patches' points (ReceiverView::mark_refinement_of), so in the boxes, and belong to the same surfaces.
+  // Only the slots are found again, unless a surface turns out to be new.
+  const bool refined = surfaces_revision_ != 0 && receivers.refines() == surfaces_revision_;
+  surfaces_revision_ = receivers.revision();
+  surfaces_size_ = count;
+  surface_slot_.resize(count);
+  const std::span<const std::uint32_t> surfaces = receivers.surfaces();
+  const std::span<const Vec3> points = receivers.points();
+  // Slots for every receiver; with `grow`, new slots for new surfaces and the boxes grown over every corner.
+  // False when a surface has no slot and `grow` is off.
+  const auto find = [&](bool grow) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    std::uint32_t slot = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      // Receivers of one surface mostly follow one another: look the id up only when it changes.
+      if (i == 0 || surfaces[i] != surfaces[i - 1]) {
+        const auto it = slot_of_surface_.find(surfaces[i]);
+        if (it != slot_of_surface_.end()) {
+          slot = it->second;
+        } else if (grow) {
+          slot = static_cast<std::uint32_t>(surface_boxes_.size());
+          slot_of_surface_.emplace(surfaces[i], slot);
+          surface_boxes_.push_back({Vec3(kInf), Vec3(-kInf)});
+        } else {
+          return false;
+        }
+      }
+      surface_slot_[i] = slot;
+      if (!grow) continue;
+      auto& [lo, hi] = surface_boxes_[slot];
+      for (std::uint32_t v = offsets_[i]; v < offsets_[i + 1]; ++v) {
+        const Vec3& p = points[corner_points_[v]];
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+    }
+    return true;
+  };
+  if (refined && find(false)) return;
+  slot_of_surface_.clear();
+  surface_boxes_.clear();
+  find(true);
 }
 
 void PreparedReceivers::prepare_receiver(std::size_t i) {

@@ -42,6 +42,7 @@
 #include <functional>
 #include <limits>
 #include <span>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -425,6 +426,12 @@ struct TaskLists {
   std::span<const std::uint32_t> list(std::size_t k) const { return {ids[k].data(), size[k]}; }
 };
 
+// A range [lo, hi] of 1 / depth, lo >= 0 and hi possibly infinite (a surface reaching the plane of the face's
+// centre, or behind it).
+struct InverseDepthRange {
+  double lo, hi;
+};
+
 // Per-shot preparation shared by both hemicubes: local coordinates, outcodes, culling and the faces each
 // receiver may reach. Reused across shots without reallocating once warmed up.
 class PreparedReceivers {
@@ -461,6 +468,13 @@ class PreparedReceivers {
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
+  // Bounds on 1 / depth (1 / a in the coordinates of `face`) over receiver i's physical surface: over the box, on the
+  // scene's axes, of the points of the view's receivers with its surface id (for a view marked as refining the one
+  // the boxes were found for, that view's boxes, which hold it). The same for every piece of one surface in a shot,
+  // whole or a subset.
+  InverseDepthRange surface_inverse_depths(std::size_t i, HemicubeFace face) const {
+    return surface_ranges_[std::size_t{surface_slot_[i]} * kHemicubeFaces + static_cast<std::size_t>(face)];
+  }
   // For every task k of face_tasks on `face`, the receivers that may touch its columns (their face_mask has the
   // task_mask; after prepare_subset, only those it put on that task's list), in order, into lists' list k: one pass
   // without branches over the receivers for all the face's tasks, so a task's loop does not mispredict on every
@@ -476,6 +490,8 @@ class PreparedReceivers {
   };
   // Sets up a shot from `shooter` (back-face culling decides each patch when first asked about).
   void start(const Shooter& shooter, const ReceiverView& receivers);
+  // surface_slot_ and surface_boxes_, found again when the view changed.
+  void find_surface_boxes(const ReceiverView& receivers);
   // point_local_[p] and point_code_[p] of point p of the view, at `world`.
   void prepare_point(std::size_t p, const Vec3& world) {
     const Vec3 q = to_local(shooter_, world);
@@ -531,6 +547,14 @@ class PreparedReceivers {
   std::vector<std::uint32_t> reached_slots_;  // in prepare_subset: the slots of the patches that may reach a tile
   std::vector<std::uint32_t> listed_;         // the receivers prepare_subset may put on a list, in order
   std::vector<std::uint64_t> listed_bits_;    // bit i % 64 of word i / 64: receiver i is listed
+  // Per receiver, a slot for its surface id (slots numbered in order of first appearance); per slot, the box on the
+  // scene's axes of its receivers' points (lowest, highest), and per shot and face the range of 1 / a over that box.
+  std::uint64_t surfaces_revision_ = 0;  // of the view the slots and boxes were found for
+  std::size_t surfaces_size_ = 0;
+  std::vector<std::uint32_t> surface_slot_;
+  std::unordered_map<std::uint32_t, std::uint32_t> slot_of_surface_;
+  std::vector<std::array<Vec3, 2>> surface_boxes_;
+  std::vector<InverseDepthRange> surface_ranges_;  // kHemicubeFaces per slot
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
