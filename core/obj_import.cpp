@@ -61,7 +61,19 @@ std::string clean_text(std::istream& in) {
                                               "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr", "illum"};
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
-  if (text.find('\n') == std::string::npos) std::replace(text.begin(), text.end(), '\r', '\n');
+  // Every line end is one LF: CR LF, and a CR alone also in a file of LF line ends, as tinyobjloader's reader
+  // splits lines; where it split at a CR that the line count did not, the faces' line numbers were lost (a stray CR
+  // in a comment made the rest of it a statement for the reader, and every message after it said line 0).
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    if (text[k] != '\r') {
+      text[kept++] = text[k];
+    } else {
+      text[kept++] = '\n';
+      if (k + 1 < text.size() && text[k + 1] == '\n') ++k;
+    }
+  }
+  text.resize(kept);
   // Where the backslash that continues `line` is (the last character but blanks and a CR), or npos.
   const auto continuation = [](const std::string& line) {
     const auto first = line.find_first_not_of(" \t");

@@ -883,6 +883,19 @@ TEST_F(SceneImport, import_cr_line_ends_and_material_names_with_spaces) {
   EXPECT_NE(said, wood.warnings.end());
 }
 
+// A CR alone in a file of LF line ends is a line end too, as the reader takes it: a comment with a CR in it
+// ended there, what followed was read as a statement, and the line count, which took the CR for part of the line,
+// gave up: every message said line 0. Found by a reviewer's fuzzing.
+TEST_F(SceneImport, import_a_cr_alone_among_lf_line_ends_keeps_the_line_numbers) {
+  const InputError e = import_error(write("stray.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n# note\rf 1 2 9\r\n"));
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(e.message().find("out of range"), std::string::npos) << e.message();
+  const Scene scene = import_obj(write("mixed.obj", "v 0 0 0\r\nv 1 0 0\rv 0 1 0\nv 1 1 0\r\nf 1 2 3\rf 2 4 3\n"));
+  ASSERT_EQ(scene.faces.size(), 2u);
+  EXPECT_EQ(scene.faces[0].source_line, 5);
+  EXPECT_EQ(scene.faces[1].source_line, 6);
+}
+
 // `fo`, an older spelling of `f`, is a face like any other; tinyobjloader passes over it, and its faces vanished.
 TEST_F(SceneImport, import_fo_statements_are_read_as_faces) {
   write("s.mtl", kSquareMtl);
