@@ -672,10 +672,19 @@ Scene import_obj(const std::string& obj_path) {
   std::size_t face_number = 0, skipped_faces = 0;
   std::string first_skip;  // the warning of the first face checked_face skipped
   bool unassigned_faces = false;
-  for (const auto& shape : shapes) {
+  // The faces to add, once the scene's size is known (below).
+  struct Kept {
+    std::size_t shape;
+    std::uint32_t material;
+    std::vector<Vec3> polygon;
+    int line;
+    std::uint32_t smoothing;
+  };
+  std::vector<Kept> kept;
+  for (std::size_t shape_index = 0; shape_index < shapes.size(); ++shape_index) {
+    const auto& shape = shapes[shape_index];
     std::string group_name = trim(shape.name);
     if (group_name.empty()) group_name = stem.empty() ? std::string("default") : stem;
-    std::optional<std::uint32_t> group;
     std::size_t offset = 0;
     for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face_number) {
       const int line = lines_known ? text.face_lines[face_number] : 0;
@@ -722,10 +731,40 @@ Scene import_obj(const std::string& obj_path) {
                                                                     "light count once"));
           continue;
         }
-        if (!group) group = scene.add_group(group_name);
-        scene.add_face(*group, material, polygon, line, smoothing);
+        kept.push_back({shape_index, material, polygon, line, smoothing});
       }
     }
+  }
+  // A face whose points all lie within kSmallestFace of the scene's diagonal of one another is below what the
+  // meshing resolves: it welds vertices closer than kPlaneDistance of the diagonal (rounding errors of the file), so
+  // such a face would collapse there, and CGAL's mesher crashed on what was left of it (a face 1 across in a scene
+  // 1e6 across). It is skipped with a warning. Leaving it out can only make the scene smaller, and the faces kept
+  // larger against it.
+  Vec3 low(std::numeric_limits<double>::infinity()), high(-std::numeric_limits<double>::infinity());
+  for (const Kept& k : kept)
+    for (const Vec3& p : k.polygon) {
+      low = glm::min(low, p);
+      high = glm::max(high, p);
+    }
+  const double smallest = kSmallestFace * glm::length(high - low);
+  std::vector<std::optional<std::uint32_t>> groups(shapes.size());
+  for (Kept& k : kept) {
+    const double size = box_diagonal(k.polygon);
+    if (size < smallest) {
+      warnings.push_back(InputError::format(
+          obj_path, k.line, "face too small against the scene (its size " + number_text(size) + " is below " +
+                                number_text(kSmallestFace) + " of the scene's diagonal, " +
+                                number_text(smallest / kSmallestFace) + ", which the meshing does not resolve) skipped; "
+                                "scale it up or give it a scene of its own"));
+      if (skipped_faces++ == 0) first_skip = warnings.back();
+      continue;
+    }
+    std::optional<std::uint32_t>& group = groups[k.shape];
+    if (!group) {
+      const std::string name = trim(shapes[k.shape].name);
+      group = scene.add_group(!name.empty() ? name : stem.empty() ? std::string("default") : stem);
+    }
+    scene.add_face(*group, k.material, std::move(k.polygon), k.line, k.smoothing);
   }
   if (unassigned_faces && text.material_uses.empty() && text.material_libraries.empty())
     warnings.push_back(InputError::format(obj_path, 0, "faces without a material use the default (reflectance 0.5 "

@@ -18,6 +18,13 @@ Vec3 vector_area(std::span<const Vec3> polygon) {
 
 double area(std::span<const Vec3> polygon) { return glm::length(vector_area(polygon)); }
 
+double box_diagonal(std::span<const Vec3> points) {
+  if (points.empty()) return 0.0;
+  Vec3 lo = points.front(), hi = points.front();
+  for (const Vec3& p : points) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  return glm::length(hi - lo);
+}
+
 Vec3 normal(std::span<const Vec3> polygon) {
   const Vec3 a = vector_area(polygon);
   const double len = glm::length(a);

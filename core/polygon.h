@@ -22,6 +22,8 @@ Vec3 centroid(std::span<const Vec3> polygon);
 Plane plane_of(std::span<const Vec3> polygon);
 // Largest distance of a vertex from plane_of(polygon).
 double planarity_deviation(std::span<const Vec3> polygon);
+// Diagonal of the axis-aligned bounding box of the points (0 for none).
+double box_diagonal(std::span<const Vec3> points);
 
 // 2D: signed area (positive counter-clockwise, y up), convexity and simplicity. Convexity and simplicity
 // are decided with exact predicates (core/predicates.h), so collinear and touching cases are reported

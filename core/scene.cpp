@@ -154,6 +154,7 @@ void Scene::validate() const {
   for (const Surface& s : surfaces) surface_faces += s.faces.size();
   if (surface_faces != faces.size())
     throw Error(where + ": physical surfaces are not built; call Scene::build_surfaces() after the last add_face");
+  const double smallest = kSmallestFace * diagonal();
   for (std::size_t fi = 0; fi < faces.size(); ++fi) {
     const Face& f = faces[fi];
     if (f.vertices.size() < 3) throw InputError(where, f.source_line, "a face has fewer than three vertices");
@@ -186,6 +187,11 @@ void Scene::validate() const {
       case FaceProblem::kZeroArea:
         throw InputError(where, f.source_line, face + " has zero area; remove it or fix its vertices");
     }
+    // Below what the initial meshing resolves, which welds vertices closer than kPlaneDistance of the diagonal:
+    // such a face would collapse there (CGAL's mesher crashed on one; the importer skips them).
+    if (box_diagonal(f.vertices) < smallest)
+      throw InputError(where, f.source_line, face + " is smaller than 1e-5 of the scene's diagonal, below what the "
+                                                    "meshing resolves; remove it or scale it up");
   }
   Rgb flux{};
   for (const Face& f : faces) flux += materials[f.material].emission * area(f.vertices);

@@ -22,6 +22,9 @@ inline constexpr double kMaxEmittedFlux = 1e200;
 // that close to one plane join one surface (build_surfaces), and the initial meshing joins vertices, and T-junctions,
 // that close to each other.
 inline constexpr double kPlaneDistance = 1e-6;
+// A face smaller than this fraction of the scene's diagonal is below what the meshing resolves (its vertices lie
+// within a few kPlaneDistance of one another): the importer skips it with a warning.
+inline constexpr double kSmallestFace = 10.0 * kPlaneDistance;
 
 struct Material {
   std::string name;
