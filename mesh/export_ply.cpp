@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -28,6 +29,19 @@ void append_u32(std::string& out, std::uint32_t value) {
   for (int byte = 0; byte < 4; ++byte) out += static_cast<char>((value >> (8 * byte)) & 0xFFu);
 }
 void append_float(std::string& out, float value) { append_u32(out, std::bit_cast<std::uint32_t>(value)); }
+void append_double(std::string& out, double value) {
+  const auto bits = std::bit_cast<std::uint64_t>(value);
+  append_u32(out, static_cast<std::uint32_t>(bits));
+  append_u32(out, static_cast<std::uint32_t>(bits >> 32));
+}
+// Whether `value` loses its magnitude in single precision: beyond the largest float (it would be inf), or non-zero
+// below the smallest normal one (subnormal or 0). Scenes and lights may be scaled far beyond either
+// (core/face_check.h, core/scene.h).
+bool beyond_float(double value) {
+  const double magnitude = std::abs(value);
+  return magnitude > std::numeric_limits<float>::max() ||
+         (magnitude != 0.0 && magnitude < std::numeric_limits<float>::min());
+}
 
 }  // namespace
 
@@ -48,18 +62,30 @@ void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, con
   const bool wide_counts = largest > std::numeric_limits<std::uint8_t>::max();
 
   const std::size_t vertex_count = m.mesh.n_vertices();
+  // Float points and radiosities, what viewers expect; double where single precision would lose them (inf or 0).
+  bool wide_points = false, wide_values = false;
+  for (std::size_t v = 0; v < vertex_count; ++v)
+    for (int k = 0; k < 3; ++k) wide_points |= beyond_float(display.positions[v][k]);
+  for (const NodeId leaf : leaves)
+    for (int c = 0; c < 3; ++c) wide_values |= node_values[leaf][c] > std::numeric_limits<float>::max();
+  const std::string point = wide_points ? "double" : "float", value = wide_values ? "double" : "float";
   std::string bytes = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertex_count) +
-                      "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
-                      "property uchar green\nproperty uchar blue\nelement face " +
+                      "\nproperty " + point + " x\nproperty " + point + " y\nproperty " + point + " z\n"
+                      "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face " +
                       std::to_string(leaves.size()) + "\nproperty list " + (wide_counts ? "int" : "uchar") +
-                      " int vertex_indices\nproperty float radiosity_r\nproperty float radiosity_g\n"
-                      "property float radiosity_b\nproperty float level\nproperty float patch\nend_header\n";
-  bytes.reserve(bytes.size() + 15 * vertex_count + leaves.size() * (24 + 4 * 5));
+                      " int vertex_indices\nproperty " + value + " radiosity_r\nproperty " + value + " radiosity_g\n"
+                      "property " + value + " radiosity_b\nproperty float level\nproperty float patch\nend_header\n";
+  bytes.reserve(bytes.size() + 27 * vertex_count + leaves.size() * (24 + 8 * 5));
+  const auto append_real = [&](bool wide, double x) {
+    if (wide) {
+      append_double(bytes, x);
+    } else {
+      append_float(bytes, static_cast<float>(x));
+    }
+  };
   for (std::size_t v = 0; v < vertex_count; ++v) {
-    const Vec3& p = display.positions[v];  // float points: what viewers expect
-    append_float(bytes, static_cast<float>(p.x));
-    append_float(bytes, static_cast<float>(p.y));
-    append_float(bytes, static_cast<float>(p.z));
+    const Vec3& p = display.positions[v];
+    for (int k = 0; k < 3; ++k) append_real(wide_points, p[k]);
     for (const std::uint8_t c : vertex_colour(display.vertex_values[v])) bytes += static_cast<char>(c);
   }
   for (std::size_t i = 0; i < leaves.size(); ++i) {
@@ -71,9 +97,7 @@ void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, con
     }
     for (const std::uint32_t v : loops[i]) append_u32(bytes, v);
     const Rgb& b = node_values[leaf];
-    append_float(bytes, static_cast<float>(b.r));
-    append_float(bytes, static_cast<float>(b.g));
-    append_float(bytes, static_cast<float>(b.b));
+    for (int c = 0; c < 3; ++c) append_real(wide_values, b[c]);
     append_float(bytes, static_cast<float>(hierarchy.level(leaf)));
     append_float(bytes, static_cast<float>(hierarchy.patch(leaf)));
   }

@@ -311,5 +311,59 @@ TEST(HierarchyExport, PlyKeepsAFaceOfMoreThan255Vertices) {
   EXPECT_EQ(mesh.color(ReadMesh::VertexHandle(0))[2], 30);
 }
 
+// Scenes may be scaled far beyond single precision (core/face_check.h: coordinates up to 1e50) and lights made
+// as bright (Ke up to 1e100), but the PLY's float coordinates and radiosities turned into inf there (a reviewer's
+// fuzzing: a scene 1e39 across, Ke 1e39). Where single precision would lose them, they are written as doubles.
+TEST(HierarchyExport, PlyWritesDoublesWhereFloatsWouldOverflow) {
+  using ReadMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+  const auto dir = std::filesystem::path(AARAD_BINARY_DIR) / "test_hierarchy_export_wide";
+  std::filesystem::create_directories(dir);
+  for (const double scale : {1.0, 1e45}) {
+    Scene scene = test::square_scene();
+    for (Face& f : scene.faces)
+      for (Vec3& v : f.vertices) v *= scale;
+    scene.build_surfaces();
+    Hierarchy h(scene, sizes(scale, 0.5 * scale));
+    for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(scale == 1.0 ? 0.5 : 1e39, 0.5, 0.25);
+    const auto path = dir / ("mesh_" + std::to_string(static_cast<int>(std::log10(scale))) + ".ply");
+    write_ply(h, values_of(h), [](const Rgb&) { return std::array<std::uint8_t, 3>{10, 20, 30}; }, path);
+    std::ifstream header(path, std::ios::binary);
+    std::string line, text;
+    while (std::getline(header, line) && line != "end_header") text += line + "\n";
+    const std::string type = scale == 1.0 ? "float" : "double";
+    EXPECT_NE(text.find("property " + type + " x\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("property " + type + " radiosity_r\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("property float level\n"), std::string::npos) << text;
+
+    // The vertices as written (OpenMesh's reader keeps its points in single precision whatever the file holds).
+    double largest = 0.0;
+    for (std::size_t v = 0; v < h.impl().mesh.n_vertices(); ++v) {
+      for (int k = 0; k < 3; ++k) {
+        double x;
+        if (scale == 1.0) {
+          float f;
+          header.read(reinterpret_cast<char*>(&f), sizeof f);
+          x = f;
+        } else {
+          header.read(reinterpret_cast<char*>(&x), sizeof x);  // little-endian, as this machine
+        }
+        largest = std::max(largest, x);
+      }
+      header.ignore(3);  // the colour
+    }
+    ASSERT_TRUE(header.good());
+    EXPECT_DOUBLE_EQ(largest, scale);  // the square's far corner, not inf
+
+    ReadMesh mesh;
+    OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary | OpenMesh::IO::Options::Custom;
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(mesh, path.string(), options)) << scale;
+    ASSERT_EQ(mesh.n_faces(), h.leaf_count());
+    if (scale == 1.0) continue;
+    OpenMesh::FPropHandleT<double> radiosity_r;
+    ASSERT_TRUE(mesh.get_property_handle(radiosity_r, "radiosity_r"));
+    for (auto f : mesh.faces()) EXPECT_EQ(mesh.property(radiosity_r, f), 1e39);
+  }
+}
+
 }  // namespace
 }  // namespace aarad::mesh

@@ -220,10 +220,22 @@ void run_solve(SolveCommandOptions options) {
                    "counter-clockwise\n");
     }
 
+    // radiosity.exr stores single precision: beyond it, a pixel is inf (mesh.ply switches to doubles there).
+    const std::vector<Rgb> displayed = solver.displayed_radiosity();
+    double brightest = 0.0;
+    for (const mesh::NodeId leaf : solver.hierarchy().leaves())
+      for (int c = 0; c < 3; ++c) brightest = std::max(brightest, displayed[leaf][c]);
+    if (brightest > std::numeric_limits<float>::max()) {
+      std::fprintf(stderr,
+                   "aarad: warning: radiosities up to %.3g exceed single precision (3.4e38): radiosity.exr holds inf "
+                   "there; scale the emission (Ke) down, radiosity is linear in it\n",
+                   brightest);
+    }
+
     // The hierarchy's invariants, and those of the display reconstruction the images and the PLY are made from.
     std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
     const std::vector<mesh::Violation> display = mesh::check_display(
-        solver.hierarchy(), mesh::build_display_mesh(solver.hierarchy(), solver.displayed_radiosity()));
+        solver.hierarchy(), mesh::build_display_mesh(solver.hierarchy(), displayed));
     violations.insert(violations.end(), display.begin(), display.end());
     // The first few on stderr; report.json lists every one.
     constexpr std::size_t kShown = 10;
