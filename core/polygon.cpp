@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace aarad {
 
@@ -90,23 +91,43 @@ bool is_convex(std::span<const Vec2> polygon) {
 bool is_simple(std::span<const Vec2> polygon) {
   const std::size_t n = polygon.size();
   if (n < 3) return false;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < n; ++i)
+    if (polygon[i] == polygon[(i + 1) % n]) return false;
+  // Edges i and j > i, (polygon[i], polygon[i + 1]) and (polygon[j], polygon[j + 1]) cyclically: do they meet
+  // only as a simple polygon's edges may?
+  const auto apart = [&](std::size_t i, std::size_t j) {
     const Vec2& a = polygon[i];
     const Vec2& b = polygon[(i + 1) % n];
-    if (a == b) return false;
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const Vec2& c = polygon[j];
-      const Vec2& d = polygon[(j + 1) % n];
-      const bool adjacent = j == i + 1 || (i == 0 && j == n - 1);
-      if (adjacent) {
-        // Adjacent edges share one vertex; they must not fold back over each other.
-        const Vec2& shared = j == i + 1 ? b : a;
-        const Vec2& p = j == i + 1 ? a : b;
-        const Vec2& q = j == i + 1 ? d : c;
-        if (orientation(p, shared, q) == Sign::kZero && glm::dot(p - shared, q - shared) > 0.0) return false;
-        continue;
-      }
-      if (segments_intersect(a, b, c, d)) return false;
+    const Vec2& c = polygon[j];
+    const Vec2& d = polygon[(j + 1) % n];
+    if (j == i + 1 || (i == 0 && j == n - 1)) {
+      // Adjacent edges share one vertex; they must not fold back over each other.
+      const Vec2& shared = j == i + 1 ? b : a;
+      const Vec2& p = j == i + 1 ? a : b;
+      const Vec2& q = j == i + 1 ? d : c;
+      return !(orientation(p, shared, q) == Sign::kZero && glm::dot(p - shared, q - shared) > 0.0);
+    }
+    return !segments_intersect(a, b, c, d);
+  };
+  // Only edges whose bounding boxes meet can meet: the edges in order of their smallest x, each against those after
+  // it that start at or before its largest x, then by y. The boxes compare the coordinates themselves, so nothing
+  // is passed over that the exact test would find; every pair of a face of n vertices was tested before (a circle of
+  // 50 000 vertices took 11 s to import).
+  const auto low_x = [&](std::size_t e) { return std::min(polygon[e].x, polygon[(e + 1) % n].x); };
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t e, std::size_t f) { return low_x(e) < low_x(f); });
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t e = order[k];
+    const Vec2& a = polygon[e];
+    const Vec2& b = polygon[(e + 1) % n];
+    const double high_x = std::max(a.x, b.x), low_y = std::min(a.y, b.y), high_y = std::max(a.y, b.y);
+    for (std::size_t m = k + 1; m < n && low_x(order[m]) <= high_x; ++m) {
+      const std::size_t f = order[m];
+      const Vec2& c = polygon[f];
+      const Vec2& d = polygon[(f + 1) % n];
+      if (std::max(c.y, d.y) < low_y || std::min(c.y, d.y) > high_y) continue;
+      if (!apart(std::min(e, f), std::max(e, f))) return false;
     }
   }
   return true;
