@@ -631,10 +631,14 @@ Scene import_obj(const std::string& obj_path) {
   if (!ok) throw InputError(obj_path, 0, "cannot parse the OBJ file: " + trim(tiny_errors));
 
   // Materials, checked against the MTL text (which knows the lines).
-  std::vector<std::uint32_t> material_index(parsed_materials.size());
+  // tinyobjloader also hands back a material without a name for an MTL file with no newmtl line (empty, or not an
+  // MTL file at all): it defines nothing, and a face that names no material gets the default one.
+  constexpr std::uint32_t kNoMaterial = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> material_index(parsed_materials.size(), kNoMaterial);
   for (std::size_t i = 0; i < parsed_materials.size(); ++i) {
     const auto found = mtl_entries.find(parsed_materials[i].name);
     const MtlEntry* entry = found != mtl_entries.end() ? &found->second : nullptr;
+    if (parsed_materials[i].name.empty() && entry == nullptr) continue;
     material_index[i] = scene.add_material(checked_material(parsed_materials[i], entry, obj_path, warnings));
   }
   std::optional<std::uint32_t> default_material;
@@ -714,7 +718,8 @@ Scene import_obj(const std::string& obj_path) {
       const int parsed_material = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
       const std::uint32_t smoothing = f < shape.mesh.smoothing_group_ids.size() ? shape.mesh.smoothing_group_ids[f] : 0;
       std::uint32_t material;
-      if (parsed_material >= 0 && static_cast<std::size_t>(parsed_material) < material_index.size()) {
+      if (parsed_material >= 0 && static_cast<std::size_t>(parsed_material) < material_index.size() &&
+          material_index[static_cast<std::size_t>(parsed_material)] != kNoMaterial) {
         material = material_index[static_cast<std::size_t>(parsed_material)];
       } else {
         if (!default_material) default_material = scene.add_material(Material{"default", Rgb(0.5), Rgb(0.0)});

@@ -902,6 +902,20 @@ TEST_F(SceneImport, import_skips_faces_too_small_against_the_scene) {
   EXPECT_NE(e.message().find("specks.obj:9: face too small against the scene"), std::string::npos) << e.message();
 }
 
+// An MTL file with no newmtl line (empty, or not an MTL file) defines no material: tinyobjloader still hands back
+// one without a name, and the importer warned that "material ''" had no Kd (a reviewer's fuzzing).
+TEST_F(SceneImport, import_an_mtl_file_without_materials_adds_none) {
+  write("empty.mtl", "");
+  write("garbage.mtl", "this is not\na material file\n");
+  for (const char* library : {"empty.mtl", "garbage.mtl"}) {
+    const Scene scene = import_obj(write("plain.obj", std::string("mtllib ") + library +
+                                                          "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+    for (const std::string& w : scene.warnings) EXPECT_EQ(w.find("material ''"), std::string::npos) << w;
+    ASSERT_EQ(scene.materials.size(), 1u) << library;
+    EXPECT_EQ(scene.materials[0].name, "default");
+  }
+}
+
 // A CR alone in a file of LF line ends is a line end too, as the reader takes it: a comment with a CR in it
 // ended there, what followed was read as a statement, and the line count, which took the CR for part of the line,
 // gave up: every message said line 0. Found by a reviewer's fuzzing.
