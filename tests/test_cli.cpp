@@ -291,6 +291,15 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   EXPECT_NE(r.err.find("nothing in the scene emits light"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("missing.mtl"), std::string::npos) << r.err;  // the warning that explains it
   EXPECT_FALSE(fs::exists(dir / "dark"));
+  // A lamp whose Ke x area underflows emits nothing either, but its Ke is above 0: the message says so, where it
+  // said there was no material with Ke above 0 (a reviewer's fuzzing).
+  write_file("faint.mtl", "newmtl lamp\nKd 0.5\nKe 4.9e-324\n");
+  const fs::path faint = write_file("faint.obj", "mtllib faint.mtl\nusemtl lamp\n"
+                                                 "o quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  r = aarad("solve " + faint.string() + " --out " + (dir / "faint").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("the emitted flux (Ke x area) is 0 in double precision"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "faint"));
 }
 
 // The output directory is checked before the first shot (docs/solver.md), also where a look at what exists is not
@@ -375,6 +384,16 @@ TEST(Cli, SolveSaysHowMuchLightLeavesAnOpenSceneAndWarnsWhenNoneLands) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("warning: none of the light shot reached a surface"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
+
+  // A floor far below the lamp gets a little of its light: the warning says how little, not "none".
+  const fs::path far = write_file("lamp_far.obj", "mtllib lamp.mtl\nv 0 -100 0\nv 1 -100 0\nv 1 -100 1\n"
+                                                  "v 0 -100 1\nv 0.4 0.5 0.4\nv 0.6 0.5 0.4\nv 0.6 0.5 0.6\n"
+                                                  "v 0.4 0.5 0.6\no floor\nusemtl white\nf 1 4 3 2\no lamp\n"
+                                                  "usemtl lamp\nf 5 6 7 8\n");
+  r = aarad("solve " + far.string() + " --quiet --out " + (dir / "far").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: only 0.00"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("% of the light shot reached a surface"), std::string::npos) << r.err;
 }
 
 // Names are bytes from the user's file: a Latin-1 group name is not UTF-8, and the JSON reports carry it with a

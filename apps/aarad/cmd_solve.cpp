@@ -176,6 +176,11 @@ void run_solve(SolveCommandOptions options) {
 
   refine::Solver solver(scene, solver_options);
   if (!(solver.emitted_flux().sum() > 0.0)) {
+    const bool lit = std::any_of(scene.faces.begin(), scene.faces.end(),
+                                 [&](const Face& f) { return scene.materials[f.material].emits(); });
+    if (lit)  // Ke x area underflows: Ke 5e-324, or Ke 1e-300 on faces 1e-49 across
+      throw Error(scene.name + ": the emitted flux (Ke x area) is 0 in double precision: the lights are too faint "
+                  "or too small; scale Ke or the scene up (radiosity is linear in Ke)");
     throw Error(scene.name + ": nothing in the scene emits light (no material with Ke above 0), so the solution "
                 "would be black" +
                 (scene.warnings.empty() ? std::string() : " (see the warnings above)"));
@@ -214,10 +219,15 @@ void run_solve(SolveCommandOptions options) {
     const double shot_flux = (solver.emitted_flux() - solver.unshot_flux()).sum();
     const double escaped = solver.escaped_flux().sum();
     if (shot_flux > 0.0 && escaped >= 0.999 * shot_flux) {
+      // "None" only when none did: a lamp lighting a little of an open scene of bright surfaces also gets here.
+      const double reached = 1.0 - escaped / shot_flux;
+      char amount[32] = "none";
+      if (reached > 1e-12) std::snprintf(amount, sizeof amount, "only %.2g %%", 100.0 * reached);
       std::fprintf(stderr,
-                   "aarad: warning: none of the light shot reached a surface: do the emitters face the scene? A face "
+                   "aarad: warning: %s of the light shot reached a surface: do the emitters face the scene? A face "
                    "emits and receives on its front side only, the side from which its vertices run "
-                   "counter-clockwise\n");
+                   "counter-clockwise\n",
+                   amount);
     }
 
     // radiosity.exr stores single precision: beyond it, a pixel is inf (mesh.ply switches to doubles there).
