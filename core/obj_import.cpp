@@ -64,9 +64,14 @@ std::string clean_text(std::istream& in) {
   // Every line end is one LF: CR LF, and a CR alone also in a file of LF line ends, as tinyobjloader's reader
   // splits lines; where it split at a CR that the line count did not, the faces' line numbers were lost (a stray CR
   // in a comment made the rest of it a statement for the reader, and every message after it said line 0).
+  // A vertical tab or form feed is a blank, as the reader takes it when it splits a statement (the line count
+  // split at spaces and tabs only, and told a face of 4 vertices written "f 1\v2 3 4" to split it into faces of at
+  // most 255).
   std::size_t kept = 0;
   for (std::size_t k = 0; k < text.size(); ++k) {
-    if (text[k] != '\r') {
+    if (text[k] == '\v' || text[k] == '\f') {
+      text[kept++] = ' ';
+    } else if (text[k] != '\r') {
       text[kept++] = text[k];
     } else {
       text[kept++] = '\n';

@@ -918,8 +918,10 @@ TEST_F(SceneImport, import_an_mtl_file_without_materials_adds_none) {
 
 // A CR alone in a file of LF line ends is a line end too, as the reader takes it: a comment with a CR in it
 // ended there, what followed was read as a statement, and the line count, which took the CR for part of the line,
-// gave up: every message said line 0. Found by a reviewer's fuzzing.
-TEST_F(SceneImport, import_a_cr_alone_among_lf_line_ends_keeps_the_line_numbers) {
+// gave up: every message said line 0. A vertical tab or form feed is a blank, as for the reader: the line count
+// took "f 1\v2 3 4" for a face of 3 vertices and the reader for one of 4, and the error said to split the face
+// into faces of at most 255. Found by a reviewer's fuzzing.
+TEST_F(SceneImport, import_stray_line_ends_and_blanks_count_as_the_reader_takes_them) {
   const InputError e = import_error(write("stray.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n# note\rf 1 2 9\r\n"));
   EXPECT_EQ(e.line(), 6);
   EXPECT_NE(e.message().find("out of range"), std::string::npos) << e.message();
@@ -927,6 +929,11 @@ TEST_F(SceneImport, import_a_cr_alone_among_lf_line_ends_keeps_the_line_numbers)
   ASSERT_EQ(scene.faces.size(), 2u);
   EXPECT_EQ(scene.faces[0].source_line, 5);
   EXPECT_EQ(scene.faces[1].source_line, 6);
+  // A vertical tab or a form feed between two vertex references is a blank, as for the reader.
+  const Scene blanks = import_obj(write("blanks.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1\v2\f3 4\n"));
+  ASSERT_EQ(blanks.faces.size(), 1u);
+  EXPECT_EQ(blanks.faces[0].vertices.size(), 4u);
+  EXPECT_EQ(blanks.faces[0].source_line, 5);
 }
 
 // `fo`, an older spelling of `f`, is a face like any other; tinyobjloader passes over it, and its faces vanished.
