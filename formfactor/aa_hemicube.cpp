@@ -160,6 +160,7 @@ void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& rece
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
   check_shot(shooter, receivers, subset, out);
   prepared_.prepare_subset(shooter, receivers, subset, geometry_);
+  prepared_.prepare_surface_ranges(receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());
   sums_.start(tasks_, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int task) {

@@ -273,6 +273,10 @@ void PreparedReceivers::start(const Shooter& shooter, const ReceiverView& receiv
   // Each patch is decided when asked: by its receivers as prepare() prepares them, in parallel, or as
   // prepare_subset() tests the few patches it looks at.
   culling_.decide_when_asked(shooter.centre, receivers);
+}
+
+void PreparedReceivers::prepare_surface_ranges(const ReceiverView& receivers) {
+  const Shooter& shooter = shooter_;
   // Each surface's range of 1 / a on each face, from its box: a is linear, so over the box it lies within the
   // value at the box's centre plus or minus the half extents weighed by the face axis' absolute components. The
   // ranges are widened by 1e-12 of their magnitude, for the rounding of the box's centre and of the dot products.

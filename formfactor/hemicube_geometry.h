@@ -468,6 +468,9 @@ class PreparedReceivers {
   std::uint32_t outside_mask(std::size_t i) const { return outside_[i]; }
   // Receiver i's plane in local coordinates (plane_to_local), computed when asked: most receivers never need it.
   Plane local_plane(std::size_t i) const { return plane_to_local(shooter_, planes_[i]); }
+  // After prepare or prepare_subset: finds what surface_inverse_depths gives for this shot (the AA hemicube's depth
+  // keys; the classical hemicube does not ask).
+  void prepare_surface_ranges(const ReceiverView& receivers);
   // Bounds on 1 / depth (1 / a in the coordinates of `face`) over receiver i's physical surface: over the box, on the
   // scene's axes, of the points of the view's receivers with its surface id (for a view marked as refining the one
   // the boxes were found for, that view's boxes, which hold it). The same for every piece of one surface in a shot,
