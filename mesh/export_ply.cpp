@@ -62,12 +62,24 @@ void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, con
   const bool wide_counts = largest > std::numeric_limits<std::uint8_t>::max();
 
   const std::size_t vertex_count = m.mesh.n_vertices();
-  // Float points and radiosities, what viewers expect; double where single precision would lose them (inf or 0).
+  // Float points and radiosities, what viewers expect; double where single precision would lose them: beyond its
+  // range (inf or 0), or, for the points, where rounding would move a vertex by more than a thousandth of the
+  // shortest edge of any loop (a scene 1 across and 1e6 from the origin kept its points on a grid of 0.0625 in
+  // floats, and half its faces collapsed).
   bool wide_points = false, wide_values = false;
-  for (std::size_t v = 0; v < vertex_count; ++v)
-    for (int k = 0; k < 3; ++k) wide_points |= beyond_float(display.positions[v][k]);
+  double shortest_edge = std::numeric_limits<double>::infinity();
+  for (const std::vector<std::uint32_t>& loop : loops)
+    for (std::size_t k = 0, j = loop.size() - 1; k < loop.size(); j = k++)
+      shortest_edge = std::min(shortest_edge, glm::length(display.positions[loop[k]] - display.positions[loop[j]]));
+  const double largest_shift = 1e-3 * shortest_edge;
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    for (int k = 0; k < 3; ++k) {
+      const double x = display.positions[v][k];
+      wide_points |= beyond_float(x) || !(std::abs(x - static_cast<double>(static_cast<float>(x))) <= largest_shift);
+    }
+  }
   for (const NodeId leaf : leaves)
-    for (int c = 0; c < 3; ++c) wide_values |= node_values[leaf][c] > std::numeric_limits<float>::max();
+    for (int c = 0; c < 3; ++c) wide_values |= beyond_float(node_values[leaf][c]);
   const std::string point = wide_points ? "double" : "float", value = wide_values ? "double" : "float";
   std::string bytes = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertex_count) +
                       "\nproperty " + point + " x\nproperty " + point + " y\nproperty " + point + " z\n"

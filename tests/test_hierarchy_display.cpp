@@ -312,56 +312,70 @@ TEST(HierarchyExport, PlyKeepsAFaceOfMoreThan255Vertices) {
 }
 
 // Scenes may be scaled far beyond single precision (core/face_check.h: coordinates up to 1e50) and lights made
-// as bright (Ke up to 1e100), but the PLY's float coordinates and radiosities turned into inf there (a reviewer's
-// fuzzing: a scene 1e39 across, Ke 1e39). Where single precision would lose them, they are written as doubles.
-TEST(HierarchyExport, PlyWritesDoublesWhereFloatsWouldOverflow) {
+// as bright or as faint (Ke up to 1e100, or down to what a double holds), but the PLY's float coordinates and
+// radiosities turned into inf or 0 there (a reviewer's fuzzing: a scene 1e39 across, Ke 1e39), and a scene 1 across
+// and 1e6 from the origin had its points rounded onto a grid of 0.0625, collapsing half its faces (another
+// reviewer's). Where single precision would lose them, they are written as doubles.
+TEST(HierarchyExport, PlyWritesDoublesWhereFloatsWouldLoseThem) {
   using ReadMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
   const auto dir = std::filesystem::path(AARAD_BINARY_DIR) / "test_hierarchy_export_wide";
   std::filesystem::create_directories(dir);
-  for (const double scale : {1.0, 1e45}) {
+  struct Case {
+    double scale, offset, radiosity;
+    bool wide_points, wide_values;
+  };
+  // Offsets of a third: points off the grids of floats.
+  const Case cases[] = {{1.0, 0.0, 0.5, false, false},          // what viewers expect
+                        {1.0, 1e3 / 3, 1e-30, false, false},    // floats within 3e-5 of an edge of 0.5
+                        {1e45, 0.0, 1e39, true, true},          // beyond the largest float
+                        {1.0, 1e6 / 3, 1e-300, true, true},     // floats up to 0.016 off; below the smallest float
+                        {1e-3, 1e6 / 3, 0.5, true, false}};
+  int index = 0;
+  for (const Case& c : cases) {
     Scene scene = test::square_scene();
     for (Face& f : scene.faces)
-      for (Vec3& v : f.vertices) v *= scale;
+      for (Vec3& v : f.vertices) v = v * c.scale + Vec3(c.offset);
     scene.build_surfaces();
-    Hierarchy h(scene, sizes(scale, 0.5 * scale));
-    for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(scale == 1.0 ? 0.5 : 1e39, 0.5, 0.25);
-    const auto path = dir / ("mesh_" + std::to_string(static_cast<int>(std::log10(scale))) + ".ply");
+    Hierarchy h(scene, sizes(c.scale, 0.5 * c.scale));
+    for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(c.radiosity, 0.5, 0.25);
+    const auto path = dir / ("mesh_" + std::to_string(index++) + ".ply");
     write_ply(h, values_of(h), [](const Rgb&) { return std::array<std::uint8_t, 3>{10, 20, 30}; }, path);
     std::ifstream header(path, std::ios::binary);
     std::string line, text;
     while (std::getline(header, line) && line != "end_header") text += line + "\n";
-    const std::string type = scale == 1.0 ? "float" : "double";
-    EXPECT_NE(text.find("property " + type + " x\n"), std::string::npos) << text;
-    EXPECT_NE(text.find("property " + type + " radiosity_r\n"), std::string::npos) << text;
+    const std::string point = c.wide_points ? "double" : "float", value = c.wide_values ? "double" : "float";
+    EXPECT_NE(text.find("property " + point + " x\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("property " + value + " radiosity_r\n"), std::string::npos) << text;
     EXPECT_NE(text.find("property float level\n"), std::string::npos) << text;
 
     // The vertices as written (OpenMesh's reader keeps its points in single precision whatever the file holds).
-    double largest = 0.0;
+    const DisplayMesh display = build_display_mesh(h, values_of(h));
     for (std::size_t v = 0; v < h.impl().mesh.n_vertices(); ++v) {
+      const Vec3& p = display.positions[v];
       for (int k = 0; k < 3; ++k) {
         double x;
-        if (scale == 1.0) {
+        if (c.wide_points) {
+          header.read(reinterpret_cast<char*>(&x), sizeof x);  // little-endian, as this machine
+        } else {
           float f;
           header.read(reinterpret_cast<char*>(&f), sizeof f);
           x = f;
-        } else {
-          header.read(reinterpret_cast<char*>(&x), sizeof x);  // little-endian, as this machine
         }
-        largest = std::max(largest, x);
+        // Within a thousandth of the square's smallest edge (0.5 scale), and exactly where written as doubles.
+        EXPECT_NEAR(x, p[k], c.wide_points ? 0.0 : 5e-4 * c.scale) << index << " " << v;
       }
       header.ignore(3);  // the colour
     }
     ASSERT_TRUE(header.good());
-    EXPECT_DOUBLE_EQ(largest, scale);  // the square's far corner, not inf
 
     ReadMesh mesh;
     OpenMesh::IO::Options options = OpenMesh::IO::Options::Binary | OpenMesh::IO::Options::Custom;
-    ASSERT_TRUE(OpenMesh::IO::read_mesh(mesh, path.string(), options)) << scale;
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(mesh, path.string(), options)) << index;
     ASSERT_EQ(mesh.n_faces(), h.leaf_count());
-    if (scale == 1.0) continue;
+    if (!c.wide_values) continue;
     OpenMesh::FPropHandleT<double> radiosity_r;
     ASSERT_TRUE(mesh.get_property_handle(radiosity_r, "radiosity_r"));
-    for (auto f : mesh.faces()) EXPECT_EQ(mesh.property(radiosity_r, f), 1e39);
+    for (auto f : mesh.faces()) EXPECT_EQ(mesh.property(radiosity_r, f), c.radiosity);
   }
 }
 
