@@ -107,14 +107,21 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   if (!next_file()) return result;
   const mesh::DisplayMesh display = mesh::build_display_mesh(hierarchy, displayed);
 
-  const Rendering flat = render(display, displayed, camera, options.width, options.height, Shading::kFlat);
-  const Image8 flat_display = tone_map(flat.image, map);
+  // The images are rendered scaled by a power of two near the exposure (render.h), so that single precision keeps
+  // what the tone map shows: with Ke 1e45 or 1e-300 the values as they are were inf or 0, and flat.png and
+  // smooth.png all white or all black while the PLY's colours were graded. Powers of two scale exactly: the PNGs
+  // and the EXR are bit for bit what scale 1 gives wherever that was in range.
+  const double scale = image_scale(map.exposure);
+  const ToneMap scaled_map{map.exposure / scale};
+  const Rendering flat = render(display, displayed, camera, options.width, options.height, Shading::kFlat, scale);
+  const Image8 flat_display = tone_map(flat.image, scaled_map);
   write_png(flat_display, directory / "flat.png");
   result.files.push_back(directory / "flat.png");
 
   if (!next_file()) return result;
-  const Rendering smooth = render(display, displayed, camera, options.width, options.height, Shading::kSmooth);
-  write_png(tone_map(smooth.image, map), directory / "smooth.png");
+  const Rendering smooth =
+      render(display, displayed, camera, options.width, options.height, Shading::kSmooth, scale);
+  write_png(tone_map(smooth.image, scaled_map), directory / "smooth.png");
   result.files.push_back(directory / "smooth.png");
 
   if (!next_file()) return result;
@@ -124,7 +131,9 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   result.files.push_back(directory / "mesh.png");
 
   if (!next_file()) return result;
-  write_exr(flat.image, directory / "radiosity.exr");
+  Image linear = flat.image;  // radiosity as it is: inf beyond single precision (aarad warns), 0 below it
+  for (float& value : linear.pixels) value = static_cast<float>(static_cast<double>(value) / scale);
+  write_exr(linear, directory / "radiosity.exr");
   result.files.push_back(directory / "radiosity.exr");
 
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -51,10 +51,11 @@ std::pair<int, int> pixel_span(double low, double high, int size) {
 }  // namespace
 
 Rendering render(const mesh::DisplayMesh& display, std::span<const Rgb> node_values, const Camera& camera,
-                 int width, int height, Shading shading) {
+                 int width, int height, Shading shading, double scale) {
   Rendering result{Image(width, height),
                    std::vector<mesh::NodeId>(static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
-                                             mesh::kNoNode)};
+                                             mesh::kNoNode),
+                   scale};
   if (width <= 0 || height <= 0 || display.positions.empty()) return result;
   std::vector<double> depth(result.leaf.size(), 0.0);  // 1 / z; larger is nearer, 0 is empty
 
@@ -120,7 +121,8 @@ Rendering render(const mesh::DisplayMesh& display, std::span<const Rgb> node_val
           if (inv_z <= depth[index]) continue;
           depth[index] = inv_z;
           result.leaf[index] = leaf;
-          const Rgb value = (a.value_over_z * w0 + b.value_over_z * w1 + c.value_over_z * w2) / (total * inv_z);
+          const Rgb value =
+              (a.value_over_z * w0 + b.value_over_z * w1 + c.value_over_z * w2) / (total * inv_z) * scale;
           float* pixel = result.image.at(x, y);
           pixel[0] = static_cast<float>(value.r);
           pixel[1] = static_cast<float>(value.g);
@@ -130,6 +132,10 @@ Rendering render(const mesh::DisplayMesh& display, std::span<const Rgb> node_val
     }
   }
   return result;
+}
+
+double image_scale(double exposure) {
+  return exposure > 0.0 && std::isfinite(exposure) ? std::ldexp(1.0, std::ilogb(exposure)) : 1.0;
 }
 
 void draw_leaf_edges(Image8& image, const std::vector<mesh::NodeId>& leaf) {

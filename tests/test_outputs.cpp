@@ -314,6 +314,49 @@ TEST(OutputsToneMap, PercentileExposureAndSrgbEncoding) {
 
 // The exposure comes from the surfaces that do not emit: the lamp clips to white instead of darkening what it
 // lights. Two unit squares (one emits 1, the other reflects what it gets, about 0.12), one element each.
+// Radiosity is linear in Ke, which may be as large as 1e100 or as faint as a double holds, and the tone map's
+// exposure follows it: the PNGs show the same picture whatever the scale. Rendered into single precision as they
+// were, the values were inf or 0, and a reviewer's scene with Ke 1e45 (or 1e-300) gave an all-white (all-black)
+// flat.png and smooth.png. Scaled by powers of two here, so that the solves are exact multiples of one another and
+// the files must agree byte for byte.
+TEST(OutputsToneMap, ImagesDoNotDependOnTheScaleOfTheEmission) {
+  const auto bytes = [](const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const fs::path root = fs::path(AARAD_BINARY_DIR) / "test-outputs" / ("scaled-" + std::to_string(getpid()));
+  fs::remove_all(root);
+  std::map<int, fs::path> folders;
+  for (const int power : {0, 150, -1000}) {
+    Scene scene = make_cornell_box();
+    for (Material& material : scene.materials) material.emission = material.emission * std::ldexp(1.0, power);
+    SolverOptions options;
+    options.meshing = default_meshing(scene);
+    options.converge = 0.2;
+    Solver solver(scene, options);
+    solver.run();
+    folders[power] = root / std::to_string(power);
+    ASSERT_TRUE(write_solution_files(solver, folders[power], {.width = 64, .height = 48}).complete);
+  }
+  for (const char* name : {"flat.png", "smooth.png", "mesh.png"}) {
+    EXPECT_GT(lit_fraction(read_image(folders[0] / name)), 0.5) << name;
+    EXPECT_TRUE(bytes(folders[0] / name) == bytes(folders[150] / name)) << name;
+    EXPECT_TRUE(bytes(folders[0] / name) == bytes(folders[-1000] / name)) << name;
+  }
+  // The EXR holds radiosity as it is: 2^150 times as much is beyond single precision (inf), and the Cornell box's
+  // radiosities times 2^-1000 are below it (0).
+  const ReadImage plain = read_image(folders[0] / "radiosity.exr");
+  const ReadImage bright = read_image(folders[150] / "radiosity.exr");
+  ASSERT_EQ(plain.pixels.size(), bright.pixels.size());
+  for (std::size_t i = 0; i < plain.pixels.size(); ++i) {
+    if (plain.pixels[i] > 0.0f) {
+      EXPECT_TRUE(std::isinf(bright.pixels[i])) << i;
+    }
+  }
+  EXPECT_EQ(lit_fraction(read_image(folders[-1000] / "radiosity.exr")), 0.0);
+  fs::remove_all(root);
+}
+
 TEST(OutputsToneMap, EmittersDoNotSetTheExposure) {
   SolverOptions options;
   options.backend = "analytic";

@@ -230,16 +230,28 @@ void run_solve(SolveCommandOptions options) {
                    amount);
     }
 
-    // radiosity.exr stores single precision: beyond it, a pixel is inf (mesh.ply switches to doubles there).
+    // radiosity.exr stores single precision: beyond it, a pixel is inf, and below it 0 or coarse (mesh.ply switches
+    // to doubles there, and the PNGs are tone-mapped from values scaled into range).
     const std::vector<Rgb> displayed = solver.displayed_radiosity();
-    double brightest = 0.0;
-    for (const mesh::NodeId leaf : solver.hierarchy().leaves())
-      for (int c = 0; c < 3; ++c) brightest = std::max(brightest, displayed[leaf][c]);
+    double brightest = 0.0, faintest = std::numeric_limits<double>::infinity();
+    for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
+      for (int c = 0; c < 3; ++c) {
+        const double value = displayed[leaf][c];
+        brightest = std::max(brightest, value);
+        if (value > 0.0) faintest = std::min(faintest, value);
+      }
+    }
     if (brightest > std::numeric_limits<float>::max()) {
       std::fprintf(stderr,
                    "aarad: warning: radiosities up to %.3g exceed single precision (3.4e38): radiosity.exr holds inf "
                    "there; scale the emission (Ke) down, radiosity is linear in it\n",
                    brightest);
+    }
+    if (faintest < std::numeric_limits<float>::min()) {
+      std::fprintf(stderr,
+                   "aarad: warning: radiosities down to %.3g are below single precision (1.2e-38): radiosity.exr "
+                   "holds 0 or loses digits there; scale the emission (Ke) up, radiosity is linear in it\n",
+                   faintest);
     }
 
     // The hierarchy's invariants, and those of the display reconstruction the images and the PLY are made from.
