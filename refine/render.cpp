@@ -141,10 +141,17 @@ double image_scale(double exposure) {
 void draw_leaf_edges(Image8& image, const std::vector<mesh::NodeId>& leaf) {
   const int w = image.width, h = image.height;
   std::vector<std::uint8_t> on_edge(leaf.size(), 0);
+  // Between two elements the line is drawn on the first pixel; between an element and the background, on the
+  // element's, so that the outline stays on the scene on every side (drawn on the first pixel, it was painted
+  // into the black background above and left of the scene).
+  const auto mark = [&](std::size_t i, std::size_t j) {
+    if (leaf[i] != leaf[j]) on_edge[leaf[i] == mesh::kNoNode ? j : i] = 1;
+  };
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      if ((x + 1 < w && leaf[i] != leaf[i + 1]) || (y + 1 < h && leaf[i] != leaf[i + w])) on_edge[i] = 1;
+      if (x + 1 < w) mark(i, i + 1);
+      if (y + 1 < h) mark(i, i + w);
     }
   }
   for (int y = 0; y < h; ++y) {

@@ -36,7 +36,7 @@ Rendering render(const mesh::DisplayMesh& display, std::span<const Rgb> node_val
 double image_scale(double exposure);
 
 // Draws one-pixel lines where the leaf id of a pixel differs from its right or lower neighbour's: dark lines
-// over bright pixels, light lines over dark ones.
+// over bright pixels, light lines over dark ones; on the pixel, or on the neighbour when the pixel is background.
 void draw_leaf_edges(Image8& image, const std::vector<mesh::NodeId>& leaf);
 
 }  // namespace aarad::refine

@@ -314,6 +314,34 @@ TEST(OutputsToneMap, PercentileExposureAndSrgbEncoding) {
 
 // The exposure comes from the surfaces that do not emit: the lamp clips to white instead of darkening what it
 // lights. Two unit squares (one emits 1, the other reflects what it gets, about 0.12), one element each.
+// mesh.png's lines lie on the scene's pixels only: where an element meets the background, on the element's side,
+// whichever side of it the background is (a reviewer found the outline painted grey into the background above and
+// left of the scene, and inside it below and right).
+TEST(OutputsRender, EdgesBetweenAnElementAndTheBackgroundAreDrawnOnTheElement) {
+  constexpr mesh::NodeId kNone = mesh::kNoNode;
+  // 5 x 3: background in the first and last columns, element 7 between, with 8 in the middle of the lower row.
+  const std::vector<mesh::NodeId> leaf{kNone, 7, 7, 7, kNone,  //
+                                       kNone, 7, 7, 7, kNone,  //
+                                       kNone, 7, 8, 7, kNone};
+  Image8 image(5, 3);
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) {
+      if (leaf[static_cast<std::size_t>(y) * 5 + x] == kNone) continue;
+      for (int c = 0; c < 3; ++c) image.at(x, y)[c] = 200;
+    }
+  }
+  draw_leaf_edges(image, leaf);
+  std::string drawn;  // '#' a line, '.' the scene unchanged, ' ' the background unchanged
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) {
+      const std::uint8_t value = image.at(x, y)[0];
+      drawn += value == 0 ? ' ' : value == 200 ? '.' : '#';
+    }
+    drawn += '/';
+  }
+  EXPECT_EQ(drawn, " #.# / ### / ### /");
+}
+
 // Radiosity is linear in Ke, which may be as large as 1e100 or as faint as a double holds, and the tone map's
 // exposure follows it: the PNGs show the same picture whatever the scale. Rendered into single precision as they
 // were, the values were inf or 0, and a reviewer's scene with Ke 1e45 (or 1e-300) gave an all-white (all-black)
