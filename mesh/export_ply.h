@@ -17,9 +17,11 @@ namespace aarad::mesh {
 using VertexColour = std::function<std::array<std::uint8_t, 3>(const Rgb&)>;
 
 // node_values is indexed by NodeId (only leaves read): the per-face radiosity. Vertex colours are the
-// display reconstruction of those values through `vertex_colour`. Written through write_file_atomically
-// (core/atomic_file.h), so `path` is whole or untouched; throws aarad::Error naming the path on failure.
+// display reconstruction of display_values (the same indexing; node_values when empty) through `vertex_colour`:
+// `aarad solve` writes the solution B per face and colours its vertices as smooth.png shows them, with the
+// display-only ambient term. Written through write_file_atomically (core/atomic_file.h), so `path` is whole or
+// untouched; throws aarad::Error naming the path on failure.
 void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const VertexColour& vertex_colour,
-               const std::filesystem::path& path);
+               const std::filesystem::path& path, std::span<const Rgb> display_values = {});
 
 }  // namespace aarad::mesh

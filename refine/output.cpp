@@ -96,9 +96,10 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   result.tone_map = solution_tone_map(solver, displayed);
   const ToneMap map = result.tone_map;
 
-  // The PLY carries the solution B (no ambient term); its vertex colours use the images' tone map.
+  // The PLY carries the solution B per face (no ambient term); its vertex colours are the displayed values through
+  // the images' tone map, as smooth.png shows them.
   const fs::path ply = directory / "mesh.ply";
-  mesh::write_ply(hierarchy, radiosity, [map](const Rgb& value) { return map(value); }, ply);
+  mesh::write_ply(hierarchy, radiosity, [map](const Rgb& value) { return map(value); }, ply, displayed);
   result.files.push_back(ply);
 
   const Scene& scene = solver.scene();

@@ -190,6 +190,37 @@ TEST_F(OutputsTest, PlyReadsBackWithOneFacePerLeafAndTheContractProperties) {
   }
 }
 
+// The PLY's faces carry the solution B; its vertex colours are what smooth.png shows: the displayed values (with
+// the display-only ambient term, which this short solve makes large) interpolated at the vertices, through the
+// images' tone map. They were B's, under the displayed values' exposure, and agreed with neither.
+TEST_F(OutputsTest, PlyVertexColoursAreTheDisplayedValuesThroughTheToneMap) {
+  const std::vector<Rgb> displayed = solver_->displayed_radiosity();
+  const ToneMap map = solution_tone_map(*solver_, displayed);
+  const mesh::DisplayMesh display = mesh::build_display_mesh(solver_->hierarchy(), displayed);
+  ASSERT_GT(solver_->ambient().max_component() * map.exposure, 0.01);  // a difference the colours show
+  // The vertex records as written, in the hierarchy's vertex order, which the display mesh's begins with: three
+  // floats and three bytes each (OpenMesh's reader leaves out vertices no face uses).
+  std::ifstream in(directory_ / "mesh.ply", std::ios::binary);
+  std::string line;
+  std::size_t count = 0;
+  while (std::getline(in, line) && line != "end_header") {
+    if (line.starts_with("element vertex ")) count = std::stoul(line.substr(15));
+    ASSERT_FALSE(line.starts_with("property double")) << "the Cornell box's points are floats";
+  }
+  ASSERT_GT(count, 0u);
+  ASSERT_LE(count, display.vertex_values.size());
+  std::size_t differing = 0;
+  for (std::size_t v = 0; v < count; ++v) {
+    in.ignore(3 * sizeof(float));
+    std::array<unsigned char, 3> colour{};
+    in.read(reinterpret_cast<char*>(colour.data()), 3);
+    const auto expected = map(display.vertex_values[v]);
+    for (int c = 0; c < 3; ++c) differing += colour[c] != expected[static_cast<std::size_t>(c)];
+  }
+  ASSERT_TRUE(in.good());
+  EXPECT_EQ(differing, 0u);
+}
+
 TEST_F(OutputsTest, ReportHasEveryFieldOfTheContract) {
   std::ifstream in(directory_ / "report.json");
   const nlohmann::json report = nlohmann::json::parse(in);
