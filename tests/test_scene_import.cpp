@@ -1065,6 +1065,37 @@ TEST(SceneModel, scene_fitted_camera_sees_the_whole_bounds) {
   }
 }
 
+// The renderer culls back faces: a scene without a camera is seen from the side that shows its front faces (a
+// reviewer's wall facing +z, and a wall in the plane x = 0, rendered black from the conventional -z side), a closed
+// room keeps the conventional view, and the camera's distance follows the scene's size however small (a scene
+// 1e-12 across was framed as if it were 1e-9 across, a dot in a black image).
+TEST(SceneModel, scene_fitted_camera_looks_at_the_front_faces) {
+  const auto one_quad = [](double size, const Vec3& u, const Vec3& v) {
+    Scene scene;
+    scene.name = "quad";
+    const std::uint32_t g = scene.add_group("wall");
+    const std::uint32_t m = scene.add_material({"white", Rgb(0.5), Rgb(1.0)});
+    scene.add_face(g, m, {Vec3(0.0), size * u, size * (u + v), size * v});  // front normal u x v
+    scene.build_surfaces();
+    return scene;
+  };
+  const Vec3 x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+  for (const auto& [u, v] : {std::pair{x, y}, std::pair{y, z}, std::pair{z, x}, std::pair{y, x}}) {
+    const Vec3 front = glm::cross(u, v);
+    const Camera c = one_quad(1.0, u, v).fitted_camera(1.0);
+    EXPECT_LT(glm::dot(c.forward, front), -0.9) << front.x << " " << front.y << " " << front.z;
+  }
+  const Camera room = make_furnace().fitted_camera(1.0);  // closed, facing inwards
+  EXPECT_NEAR(glm::dot(room.forward, glm::normalize(Vec3(0.0, -0.2, 1.0))), 1.0, 1e-12);
+  const Camera unit = one_quad(1.0, x, y).fitted_camera(1.0);
+  for (const double size : {1e-12, 1e-45, 1e12}) {
+    const Camera c = one_quad(size, x, y).fitted_camera(1.0);
+    EXPECT_NEAR(glm::length(c.eye - Vec3(0.5 * size, 0.5 * size, 0.0)) / size,
+                glm::length(unit.eye - Vec3(0.5, 0.5, 0.0)), 1e-9)
+        << size;
+  }
+}
+
 TEST(SceneModel, scene_validate_rejects_bad_materials) {
   Scene scene;
   scene.name = "handmade";
