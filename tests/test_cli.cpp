@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -583,6 +584,57 @@ TEST(Cli, FormfactorsFromAPlanarGroupOfTwoMaterials) {
   EXPECT_EQ(from_two["normal"], nlohmann::json::parse("[0.0, 1.0, 0.0]"));
   EXPECT_GT(factor_to(from_two, "lid"), 0.3);
   EXPECT_EQ(factor_to(from_two, "lid"), factor_to(from_one, "lid"));
+}
+
+// A lamp modelled as a disk of 24 triangles and written with six decimals, as modellers write coordinates: the
+// rounding tilts its small triangles by about 1e-5 rad, more than the import's surfaces allow (the group is split
+// into several surfaces, as `aarad inspect` shows), though it is one plane within the scene's tolerance and faces
+// one way. It was refused as "a two-sided panel" (a reviewer's rotated room); it shoots as one planar polygon along
+// its area-weighted normal, and gets what the same lamp written in full precision gets.
+TEST(Cli, FormfactorsFromAPlanarGroupWrittenWithSixDecimals) {
+  const double angle = 0.5, c = std::cos(angle), s = std::sin(angle);
+  const double x = 1.0 / std::sqrt(14.0), y = 2.0 / std::sqrt(14.0), z = 3.0 / std::sqrt(14.0);  // the axis
+  const double rotation[3][3] = {{c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s},
+                                 {y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s},
+                                 {z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)}};
+  const auto scene = [&](const char* format) {
+    std::string text;
+    const auto vertex = [&](double px, double py, double pz) {
+      const double p[3] = {px, py, pz};
+      double q[3];
+      for (int a = 0; a < 3; ++a) q[a] = rotation[a][0] * p[0] + rotation[a][1] * p[1] + rotation[a][2] * p[2];
+      char line[160];
+      std::snprintf(line, sizeof line, format, q[0], q[1], q[2]);
+      text += line;
+    };
+    for (const auto& [px, pz] : {std::pair{0.0, 0.0}, {0.0, 2.0}, {2.0, 2.0}, {2.0, 0.0}}) vertex(px, 0.0, pz);
+    vertex(1.0, 1.0, 1.0);  // the lamp's centre, vertex 5, facing down
+    constexpr int kSides = 24;
+    for (int k = 0; k < kSides; ++k) {
+      const double a = 2.0 * M_PI * k / kSides;
+      vertex(1.0 + 0.15 * std::cos(a), 1.0, 1.0 + 0.15 * std::sin(a));
+    }
+    text += "o floor\nf 1 2 3 4\no lamp\n";
+    for (int k = 0; k < kSides; ++k)
+      text += "f 5 " + std::to_string(6 + k) + " " + std::to_string(6 + (k + 1) % kSides) + "\n";
+    return text;
+  };
+  const fs::path rounded = write_file("lamp_6.obj", scene("v %.6f %.6f %.6f\n"));
+  const fs::path full = write_file("lamp_17.obj", scene("v %.17g %.17g %.17g\n"));
+  const ProgramRun inspect = aarad("inspect " + rounded.string() + " --json");
+  ASSERT_EQ(inspect.code, 0) << inspect.err;
+  for (const auto& group : nlohmann::json::parse(inspect.out)["groups"]) {
+    if (group["name"] == "lamp") {
+      ASSERT_GT(group["surfaces"].size(), 1u) << "the rounding no longer splits it";
+    }
+  }
+  for (const char* method : {"analytic", "hemicube", "aa-hemicube"}) {
+    const double expected = factor_to(formfactors_json(full, "lamp", std::string("--ff ") + method), "floor");
+    EXPECT_GT(expected, 0.5);
+    EXPECT_NEAR(factor_to(formfactors_json(rounded, "lamp", std::string("--ff ") + method), "floor"), expected,
+                1e-5)
+        << method;
+  }
 }
 
 TEST(Cli, FormfactorsFromABadGroupIsAnError) {

@@ -40,26 +40,40 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
   for (const std::uint32_t f : scene.groups[group_index].faces) one_material.faces[f].material = 0;
   one_material.build_surfaces();
   const Group& group = one_material.groups[group_index];
+  // The faces to shoot from and their plane's normal.
+  std::vector<std::uint32_t> faces = group.faces;
+  Vec3 n = one_material.surfaces[group.surfaces.front()].plane.normal;
   if (group.surfaces.size() != 1) {
-    // Faces of one plane form one surface when they face one way: several surfaces in one plane are faces turned
-    // both ways (a two-sided panel), which have no one normal to shoot along. That is not "2 planes".
     const Plane& plane = one_material.surfaces[group.surfaces.front()].plane;
     const double tolerance = kPlaneDistance * scene.diagonal();
-    bool one_plane = true;
-    for (const std::uint32_t f : group.faces)
+    bool one_plane = true, one_way = true;
+    Vec3 vector_sum(0.0);
+    for (const std::uint32_t f : group.faces) {
       for (const Vec3& v : scene.faces[f].vertices)
         one_plane = one_plane && std::abs(plane.signed_distance(v)) <= tolerance;
-    if (one_plane) {
+      const Vec3 a = vector_area(scene.faces[f].vertices);
+      one_way = one_way && glm::dot(a, plane.normal) > 0.0;
+      vector_sum += a;
+    }
+    if (one_plane && !one_way) {
+      // Faces of one plane turned both ways (a two-sided panel) have no one normal to shoot along. That is not
+      // "2 planes".
       throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in one plane but face both "
                   "ways (a two-sided panel), so it has no one normal; pick a group whose faces all face one way");
     }
-    throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in " +
-                std::to_string(group.surfaces.size()) + " planes; pick a planar group");
+    if (!one_plane) {
+      throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in " +
+                  std::to_string(group.surfaces.size()) + " planes; pick a planar group");
+    }
+    // Faces in one plane, within the scene's tolerance, that face one way, and whose normals still differ by more
+    // than the import's surfaces allow (1e-10 in their dot product, about 1.4e-5 rad): small triangles of a disk
+    // written with six decimals, as modellers write them, tilt by about that much. They are one planar polygon, and
+    // its normal is their area-weighted one (a reviewer's lamp of 24 triangles was refused as two-sided).
+    n = glm::normalize(vector_sum);
   }
-  const Surface& surface = one_material.surfaces[group.surfaces.front()];
   Vec3 weighted(0.0);
   double total = 0.0;
-  for (std::uint32_t f : surface.faces) {
+  for (std::uint32_t f : faces) {
     const double a = area(scene.faces[f].vertices);
     weighted += a * centroid(scene.faces[f].vertices);
     total += a;
@@ -67,10 +81,9 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
   if (!(total > 0.0)) throw Error("group '" + group.name + "' has zero area; pick a group with a real face");
   const Vec3 point = weighted / total;
   // The centroid of a concave group (an L, a C) may lie off its faces: the factors are still from that point.
-  const Vec3& n = surface.plane.normal;
   Vec2 point_2d;
   project_to_2d(std::span<const Vec3>(&point, 1), n, std::span<Vec2>(&point_2d, 1));
-  const bool on_a_face = std::any_of(surface.faces.begin(), surface.faces.end(), [&](std::uint32_t f) {
+  const bool on_a_face = std::any_of(faces.begin(), faces.end(), [&](std::uint32_t f) {
     const std::vector<Vec3>& vertices = scene.faces[f].vertices;
     std::vector<Vec2> face_2d(vertices.size());
     project_to_2d(vertices, n, face_2d);
