@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace aarad::formfactor {
@@ -20,7 +21,13 @@ double polygon_form_factor(const Vec3& point, const Vec3& normal, std::span<cons
     // R_{i+1} x R_i, as (v_{i+1} - v_i) x R_i: the same vector, without the cancellation of two nearly parallel
     // long vectors (a receiver small against its distance: at 1e-8 of it the direct product was noise).
     const Vec3 c = glm::cross(polygon[i] - polygon[i == 0 ? m - 1 : i - 1], r0);
-    const double len = glm::length(c);
+    double len = glm::length(c);
+    if (len < 1e-140) {
+      // |c|^2 underflows below about 1e-154: the length of c scaled by its largest component instead (an edge 1e-200
+      // from the point, in its plane, came out as 0 and was dropped, with all of a wall's 0.5).
+      const double largest = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+      if (largest > 0.0) len = largest * glm::length(c / largest);
+    }
     if (len > 0.0) {
       const double gamma = std::atan2(len, glm::dot(r0, r1));
       sum += gamma * glm::dot(normal, c) / len;

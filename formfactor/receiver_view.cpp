@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <string>
 
 namespace aarad::formfactor {
@@ -80,10 +81,16 @@ void ReceiverView::append_from(const ReceiverView& other, std::uint32_t first, s
   patches_.insert(patches_.end(), other.patches_.begin() + first, other.patches_.begin() + last);
 }
 
+// A corner or plane that is not finite (a polygon 1e150 across, whose plane overflowed to nan) made the exact
+// predicates of a shot abort the process (GMP raises SIGFPE on nan): refused here, with a message.
 // A polygon wound the other way round its plane's normal gets a negative factor from the analytic back end and
 // nothing from the hemicubes, which take it for a back face: refused. Only a polygon clearly facing away is (its
 // vector area more than half its length against the normal); a sliver whose vector area is a rounding error passes.
-void ReceiverView::check_winding(std::span<const Vec3> polygon, const Plane& plane) const {
+void ReceiverView::check_receiver(std::span<const Vec3> polygon, const Plane& plane) const {
+  const auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  if (!std::all_of(polygon.begin(), polygon.end(), finite) || !finite(plane.normal) || !std::isfinite(plane.d))
+    throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
+                " has a corner or plane that is not finite (nan or inf); give finite corners and plane");
   const Vec3 vector = vector_area(polygon);
   if (glm::dot(vector, plane.normal) < -0.5 * glm::length(vector))
     throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
@@ -92,7 +99,7 @@ void ReceiverView::check_winding(std::span<const Vec3> polygon, const Plane& pla
 
 std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface,
                                 std::uint32_t patch) {
-  check_winding(polygon, plane);
+  check_receiver(polygon, plane);
   for (const Vec3& p : polygon) {
     corner_points_.push_back(static_cast<std::uint32_t>(points_.size()));
     points_.push_back(p);
@@ -105,7 +112,7 @@ std::uint32_t ReceiverView::add(std::span<const Vec3> polygon, std::span<const s
   if (keys.size() != polygon.size())
     throw Error("ReceiverView::add: " + std::to_string(keys.size()) + " keys for " + std::to_string(polygon.size()) +
                 " corners");
-  check_winding(polygon, plane);
+  check_receiver(polygon, plane);
   // On a conflict, the view is left as it was: the keys bound and the points added by this call are taken back.
   const std::size_t old_points = points_.size(), old_corners = corner_points_.size();
   for (std::size_t k = 0; k < polygon.size(); ++k) {

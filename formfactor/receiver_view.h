@@ -27,7 +27,7 @@ class ReceiverView {
   void clear();
   void reserve(std::size_t receivers, std::size_t vertices);
   // Appends a receiver and returns its index. Throws aarad::Error for a polygon wound clockwise round the plane's
-  // normal (and then leaves the view as it was).
+  // normal, or with a corner or plane that is not finite (and then leaves the view as it was).
   std::uint32_t add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface, std::uint32_t patch);
   // The same, with a caller's key per corner (keys[k] for polygon[k]): corners with equal keys share one point.
   // Equal keys must come with equal coordinates (checked: throws aarad::Error otherwise, and leaves the view as it
@@ -73,7 +73,7 @@ class ReceiverView {
   std::span<const std::uint32_t> patches() const { return patches_; }
 
  private:
-  void check_winding(std::span<const Vec3> polygon, const Plane& plane) const;
+  void check_receiver(std::span<const Vec3> polygon, const Plane& plane) const;
   std::uint32_t append(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface, std::uint32_t patch);
 
   std::vector<Vec3> vertices_;

@@ -136,6 +136,26 @@ TEST(FormfactorBackends, ShotsWithABadFrameOrOutputSizeAreRefused) {
   EXPECT_THROW(Shooter::from_normal(Vec3(0), Vec3(std::nan(""), 0, 1)), Error);
 }
 
+// A receiver with a corner or plane that is not finite is refused when it is added: a square 1e150 across has a
+// plane that overflows to nan (plane_of squares its size), and a shot then aborted the process (the exact
+// predicates' GMP raised SIGFPE on nan).
+TEST(FormfactorBackends, AReceiverThatIsNotFiniteIsRefused) {
+  ReceiverView view;
+  const Polygon huge = rectangle({0, 0, 1e150}, {0, 1e150, 0}, {1e150, 0, 0});
+  ASSERT_FALSE(std::isfinite(plane_of(huge).d));
+  EXPECT_THROW(add(view, huge, 0, 0), Error);
+  Polygon inf = rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0});
+  inf[2].x = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(view.add(inf, plane_of(rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0})), 0, 0), Error);
+  EXPECT_EQ(view.size(), 0u);
+  add(view, rectangle({0, 0, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);
+  for (const std::string& name : backend_names()) {
+    std::vector<double> out(1, 0.0);
+    make_backend(name, {.resolution = 64})->compute(kUp, view, {}, out);
+    EXPECT_NEAR(out[0], 0.1385316060, 0.01) << name;
+  }
+}
+
 // A subset naming a receiver the view does not have: every back end crashed (a segmentation fault reading past the
 // view's arrays) instead of saying so.
 TEST(FormfactorBackends, ASubsetEntryBeyondTheReceiversIsRefused) {
@@ -158,6 +178,16 @@ TEST(FormfactorBackends, ASubsetEntryBeyondTheReceiversIsRefused) {
     EXPECT_NO_THROW(backend->compute(down, view, within, out)) << name;
     EXPECT_GT(out[0], 0.0) << name;
   }
+}
+
+// A wall next to the point, perpendicular to its plane, at a distance g: as g -> 0 it covers the quarter of the
+// sphere of directions in front of it and above the plane, which is half the hemisphere's projected area, so its
+// factor tends to 0.5 (within about g of it for a wall 2 x 1). The cross product of its bottom edge with the vector
+// to it is about g long; its squared length underflowed below g = 1e-154, the edge was dropped, and a wall 1e-200
+// away got -2.5e-201 (a reviewer's case).
+TEST(FormfactorAnalytic, AWallAsCloseAsADoubleAllowsGetsHalf) {
+  const auto wall = [](double g) { return analytic(kUp, rectangle({g, -1, 0}, {0, 0, 1}, {0, 2, 0})); };
+  for (const double g : {1e-12, 1e-100, 1e-160, 1e-200, 1e-300}) EXPECT_NEAR(wall(g), 0.5, 1e-11) << g;
 }
 
 // A receiver small against its distance: the factor approaches the point-to-point kernel cos cos A / (pi r^2).
