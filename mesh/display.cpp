@@ -11,6 +11,8 @@
 #include <cmath>
 #include <numeric>
 #include <tuple>
+#include <unordered_map>
+#include <utility>
 
 namespace aarad::mesh {
 namespace {
@@ -37,7 +39,8 @@ struct Host {
 // nonzero smoothing group that lie at one point, within the distance at which the initial meshing joins
 // vertices, pool their leaves' areas and values, so that each of them takes the area-weighted mean of all the
 // leaves around the point and the display is continuous across the edges between those surfaces. Hanging
-// vertices keep their host edge's interpolation (a surface's outer boundary has none).
+// vertices keep their host edge's interpolation (a surface's outer boundary has none); hang_smoothed_vertices then
+// handles the boundary vertices that the other side of such an edge lacks.
 void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
                             std::span<const Host> host, std::vector<Rgb>& weighted, std::vector<double>& weight) {
   const double tolerance = kPlaneDistance * m.scene.diagonal();
@@ -112,6 +115,141 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
   }
 }
 
+// Smoothing groups, after the pooling: where the two sides of an edge between surfaces of one scene group and one
+// nonzero smoothing group are split differently, a boundary vertex of one side lies strictly inside a boundary edge
+// of the other, which shows the linear interpolation of its ends there. Such a vertex hangs across the surfaces: it
+// takes that interpolation too, as a T-vertex inside a surface does, so both sides show one line. Its host edge's
+// ends may hang across themselves when the two sides' vertices interleave (an edge cut in three on one side and in
+// two on the other): then only one line through the nearest vertices that hang on no edge is continuous on both
+// sides, so the host becomes that pair, found by walking along the line away from the vertex. "Strictly inside"
+// and "on the edge" mean farther than the pooling tolerance from both ends and within it of the segment.
+void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
+                            std::span<const double> weight, std::vector<Host>& host) {
+  const double tolerance = kPlaneDistance * m.scene.diagonal();
+  const auto surface_of = [&](int v) -> const Surface& {
+    return m.scene.surfaces[vertex_surface[static_cast<std::size_t>(v)]];
+  };
+  // Boundary edges of smoothing surfaces, entered in a grid at points along them no farther apart than a quarter of
+  // the cell side: a point on the segment lies within an eighth of a side of one of them, so a vertex within the
+  // tolerance of the segment (at most an eighth of a side) lies less than half a side from one, which is in the
+  // vertex's cell or in one of the 8 around it on the side of its nearer cell walls. The side is the median length
+  // of the edges, so a cell holds a few edges and an edge a few cells; cells are found through a hash table.
+  struct CellKey {
+    std::uint32_t group, smoothing;
+    std::array<double, 3> cell;
+    bool operator==(const CellKey&) const = default;
+    auto tied() const { return std::tie(group, smoothing, cell); }
+  };
+  struct CellHash {
+    std::size_t operator()(const CellKey& k) const {
+      std::size_t h = std::hash<std::uint64_t>()((std::uint64_t{k.group} << 32) ^ k.smoothing);
+      for (const double x : k.cell) h = h * 0x9E3779B97F4A7C15ull ^ std::hash<double>()(x);
+      return h;
+    }
+  };
+  struct Entry {
+    CellKey key;
+    int a, b;
+  };
+  std::vector<std::array<int, 2>> edges;
+  std::vector<double> lengths;
+  for (const auto h : m.mesh.halfedges()) {
+    if (!h.is_boundary()) continue;
+    const int a = h.from().idx(), b = h.to().idx();
+    if (!(weight[static_cast<std::size_t>(a)] > 0.0) || host[static_cast<std::size_t>(a)].a >= 0 ||
+        surface_of(a).smoothing == 0)
+      continue;
+    edges.push_back({a, b});
+    lengths.push_back(glm::length(m.point(b) - m.point(a)));
+  }
+  if (edges.empty()) return;
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+  const double side = std::max(lengths[lengths.size() / 2], 8.0 * tolerance);
+  const auto cell_of = [&](const Vec3& p) {
+    return std::array<double, 3>{std::floor(p.x / side), std::floor(p.y / side), std::floor(p.z / side)};
+  };
+  std::vector<Entry> entries;
+  for (const auto& [a, b] : edges) {
+    const Surface& surface = surface_of(a);
+    const Vec3 pa = m.point(a), d = m.point(b) - pa;
+    const double pieces = std::ceil(4.0 * glm::length(d) / side);
+    for (double i = 0.0; i <= pieces; ++i)
+      entries.push_back({{surface.group, surface.smoothing, cell_of(pa + (i / pieces) * d)}, a, b});
+  }
+  std::sort(entries.begin(), entries.end(), [](const Entry& c, const Entry& d) {
+    return std::tuple_cat(c.key.tied(), std::tie(c.a)) < std::tuple_cat(d.key.tied(), std::tie(d.a));
+  });
+  entries.erase(std::unique(entries.begin(), entries.end(),
+                            [](const Entry& c, const Entry& d) { return c.key == d.key && c.a == d.a; }),
+                entries.end());
+  std::unordered_map<CellKey, std::pair<std::size_t, std::size_t>, CellHash> cells;
+  for (std::size_t begin = 0; begin < entries.size();) {
+    std::size_t end = begin + 1;
+    while (end < entries.size() && entries[end].key == entries[begin].key) ++end;
+    cells.emplace(entries[begin].key, std::pair{begin, end});
+    begin = end;
+  }
+  std::vector<int> boundary_vertices;  // every boundary vertex starts one boundary halfedge
+  for (const auto& edge : edges) boundary_vertices.push_back(edge[0]);
+  std::sort(boundary_vertices.begin(), boundary_vertices.end());
+
+  // The edge each boundary vertex hangs on across surfaces (the first found), a = -1 for none.
+  std::vector<Host> across(host.size());
+  const auto hang_across = [&](int v, const Entry& e) {
+    const Vec3 p = m.point(v), pa = m.point(e.a), d = m.point(e.b) - pa;
+    const double t = glm::dot(p - pa, d) / glm::dot(d, d);
+    if (vertex_surface[static_cast<std::size_t>(e.a)] == vertex_surface[static_cast<std::size_t>(v)] ||
+        !(t > 0.0 && t < 1.0) || glm::length(p - pa) <= tolerance || glm::length(p - m.point(e.b)) <= tolerance ||
+        glm::length(pa + t * d - p) > tolerance)
+      return false;
+    across[static_cast<std::size_t>(v)] = {e.a, e.b, t};
+    return true;
+  };
+  for (const int v : boundary_vertices) {
+    const Surface& surface = surface_of(v);
+    const Vec3 p = m.point(v);
+    const std::array<double, 3> own = cell_of(p);
+    std::array<double, 3> toward;  // the neighbouring cell on the side of the nearer cell wall, per axis
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto i = static_cast<std::size_t>(axis);
+      toward[i] = own[i] + (p[axis] / side - own[i] < 0.5 ? -1.0 : 1.0);
+    }
+    bool found = false;
+    for (int corner = 0; corner < 8 && !found; ++corner) {
+      const CellKey key{surface.group, surface.smoothing,
+                        {(corner & 1) ? toward[0] : own[0], (corner & 2) ? toward[1] : own[1],
+                         (corner & 4) ? toward[2] : own[2]}};
+      const auto cell = cells.find(key);
+      if (cell == cells.end()) continue;
+      const auto [first, last] = cell->second;
+      for (std::size_t e = first; e < last && !found; ++e) found = hang_across(v, entries[e]);
+    }
+  }
+
+  // Walks from `end` along the line from v through it, as long as the vertex reached hangs across on an edge of that
+  // line, to the first one that does not; each step goes farther from v, and the walk is capped for a corrupted mesh.
+  const auto walk = [&](int v, int end) {
+    const Vec3 p = m.point(v);
+    for (std::size_t steps = 0; steps < boundary_vertices.size(); ++steps) {
+      const Host& next = across[static_cast<std::size_t>(end)];
+      if (next.a < 0) break;
+      const Vec3 direction = m.point(end) - p;
+      const int far = glm::dot(m.point(next.b) - m.point(next.a), direction) > 0.0 ? next.b : next.a;
+      const Vec3 q = m.point(far) - p;
+      if (glm::length(q - direction * (glm::dot(q, direction) / glm::dot(direction, direction))) > tolerance) break;
+      end = far;
+    }
+    return end;
+  };
+  for (const int v : boundary_vertices) {
+    const Host& edge = across[static_cast<std::size_t>(v)];
+    if (edge.a < 0) continue;
+    const int a = walk(v, edge.a), b = walk(v, edge.b);
+    const Vec3 pa = m.point(a), d = m.point(b) - pa;
+    host[static_cast<std::size_t>(v)] = {a, b, glm::dot(m.point(v) - pa, d) / glm::dot(d, d)};
+  }
+}
+
 }  // namespace
 
 DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> node_values) {
@@ -147,10 +285,16 @@ DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> 
       vertex_surface[v] = m.surface[leaf];
     }
   }
-  pool_smoothed_vertices(m, vertex_surface, host, weighted, weight);
+  // Smoothing groups: nothing of it runs for a scene without one.
+  const auto smoothing = [](const Surface& surface) { return surface.smoothing != 0; };
+  if (std::any_of(m.scene.surfaces.begin(), m.scene.surfaces.end(), smoothing)) {
+    pool_smoothed_vertices(m, vertex_surface, host, weighted, weight);
+    hang_smoothed_vertices(m, vertex_surface, weight, host);
+  }
 
   // Resolve values; a hanging vertex's host corners may hang on a coarser leaf themselves (nested), so
-  // resolve depth first. Host edges belong to strictly larger leaves, so the recursion ends.
+  // resolve depth first. Host edges belong to strictly larger leaves, so the recursion ends; a vertex hanging
+  // across surfaces is hosted by vertices that hang on no edge of another surface (hang_smoothed_vertices).
   DisplayMesh out;
   out.positions.reserve(vertex_count);
   for (std::size_t v = 0; v < vertex_count; ++v) out.positions.push_back(m.point(static_cast<int>(v)));
