@@ -162,6 +162,103 @@ TEST(HierarchyDisplay, SmoothingGroupsPoolTheCornersSharedAcrossSurfaces) {
   }
 }
 
+// Two faces of one smoothing group meeting along the edge x = 1, z = 0 from (1, 0, 0) to (1, 1, 0): the unit square in
+// z = 0 and the quadrilateral `other` (counter-clockwise, its first and last corners on that edge).
+Scene smoothed_pair(const std::vector<Vec3>& other) {
+  Scene scene;
+  scene.name = "smoothed pair";
+  const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  const std::uint32_t group = scene.add_group("pair");
+  scene.add_face(group, grey, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, 0, 1);
+  scene.add_face(group, grey, other, 0, 1);
+  scene.build_surfaces();
+  return scene;
+}
+
+// The leaf whose centroid is nearest to `point`.
+NodeId leaf_nearest(const Hierarchy& h, const Vec3& point) {
+  const std::vector<NodeId> leaves = h.leaves();
+  return *std::min_element(leaves.begin(), leaves.end(), [&](NodeId a, NodeId b) {
+    return glm::length(h.centroid(a) - point) < glm::length(h.centroid(b) - point);
+  });
+}
+
+// Along the edge x = 1, z = 0 every display vertex of one surface shows what the other surface's triangles show at
+// its point: the value of a vertex there, or the linear interpolation along a triangle edge through it. Returns the
+// number of comparisons.
+int expect_continuous_along_the_shared_edge(const Hierarchy& h, const DisplayMesh& d) {
+  const auto on_edge = [](const Vec3& p) { return std::abs(p.x - 1.0) < 1e-12 && std::abs(p.z) < 1e-12; };
+  std::vector<std::uint32_t> surface(d.positions.size());
+  for (std::size_t t = 0; t < d.triangles.size(); ++t)
+    for (const std::uint32_t v : d.triangles[t]) surface[v] = h.surface(d.triangle_leaf[t]);
+  int comparisons = 0;
+  for (std::size_t t = 0; t < d.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = d.triangles[t][static_cast<std::size_t>(k)];
+      const std::uint32_t b = d.triangles[t][static_cast<std::size_t>((k + 1) % 3)];
+      const Vec3 pa = d.positions[a], pb = d.positions[b];
+      if (!on_edge(pa) || !on_edge(pb)) continue;
+      for (std::size_t v = 0; v < d.positions.size(); ++v) {
+        const double along = (d.positions[v].y - pa.y) / (pb.y - pa.y);
+        if (surface[v] == h.surface(d.triangle_leaf[t]) || !on_edge(d.positions[v]) || along < 0.0 || along > 1.0)
+          continue;
+        const Rgb shown = d.vertex_values[a] * (1.0 - along) + d.vertex_values[b] * along;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(d.vertex_values[v][c], shown[c], 1e-12) << "vertex at y = " << d.positions[v].y;
+        ++comparisons;
+      }
+    }
+  return comparisons;
+}
+
+// The square and a bent square, one element each, then refined differently next to their shared edge: the square's
+// element quartered and its quarter at (1, 0) quartered again (edge vertices at y = 0, 0.25, 0.5, 1), the bent
+// square's quartered and its quarter at (1, 1) quartered again (y = 0, 0.5, 0.75, 1). Each side's vertex at y = 0.25
+// or 0.75 lies inside an edge of the other side; it shows that edge's interpolation, so the two sides agree all along
+// the edge (each keeping its own area-weighted mean, the two sides differed by up to 0.30 at y = 0.25 and 0.75).
+TEST(HierarchyDisplay, SmoothingGroupIsContinuousAlongAnEdgeItsSurfacesSplitDifferently) {
+  Hierarchy h(smoothed_pair({{1, 0, 0}, {2, 0, 0.3}, {2, 1, 0.3}, {1, 1, 0}}), sizes(2.0, 2.0));
+  ASSERT_EQ(h.leaf_count(), 2u);
+  ASSERT_TRUE(h.split(leaf_nearest(h, {0.5, 0.5, 0})).ok);
+  ASSERT_TRUE(h.split(leaf_nearest(h, {0.75, 0.25, 0})).ok);
+  ASSERT_TRUE(h.split(leaf_nearest(h, {1.5, 0.5, 0.15})).ok);
+  ASSERT_TRUE(h.split(leaf_nearest(h, {1.25, 0.75, 0.075})).ok);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Rgb> values(h.node_count());
+  for (const NodeId leaf : h.leaves()) values[leaf] = Rgb(unit(rng), unit(rng), unit(rng));
+  const DisplayMesh d = build_display_mesh(h, values);
+  // Each side's 3 triangle edges along the shared edge hold 5 vertices of the other side, ends included.
+  EXPECT_EQ(expect_continuous_along_the_shared_edge(h, d), 10);
+  expect_crack_free(h, d);
+  EXPECT_TRUE(check_invariants(h).empty()) << test::describe(check_invariants(h));
+}
+
+// The sides cut the shared edge into different numbers of pieces that interleave: at patch size 0.4 the unit square
+// has 3 rows of patches, the trapezoid beside it, 1.5 long on its far side, 4. No vertex inside the edge is on both
+// sides, so only one line is continuous on both: every vertex along the edge shows the interpolation between its
+// ends.
+TEST(HierarchyDisplay, SmoothingGroupIsContinuousWhereTheSidesCutAnEdgeIntoInterleavingPieces) {
+  const Hierarchy h(smoothed_pair({{1, 0, 0}, {2, -0.25, 0.3}, {2, 1.25, 0.3}, {1, 1, 0}}), sizes(0.4, 0.4));
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Rgb> values(h.node_count());
+  for (const NodeId leaf : h.leaves()) values[leaf] = Rgb(unit(rng), unit(rng), unit(rng));
+  const DisplayMesh d = build_display_mesh(h, values);
+  std::map<std::uint32_t, std::set<double>> cuts;  // per surface, the y of its vertices along the edge
+  for (std::size_t t = 0; t < d.triangles.size(); ++t)
+    for (const std::uint32_t v : d.triangles[t])
+      if (d.positions[v].x == 1.0 && d.positions[v].z == 0.0)
+        cuts[h.surface(d.triangle_leaf[t])].insert(d.positions[v].y);
+  ASSERT_EQ(cuts.size(), 2u);
+  EXPECT_EQ(cuts.begin()->second.size(), 4u);   // 0, 1/3, 2/3, 1
+  EXPECT_EQ(cuts.rbegin()->second.size(), 5u);  // 0, 1/4, 1/2, 3/4, 1
+  // The square's 3 triangle edges along the shared edge hold 5 of the trapezoid's vertices; its 4, 4 of the square's.
+  EXPECT_EQ(expect_continuous_along_the_shared_edge(h, d), 9);
+  expect_crack_free(h, d);
+  EXPECT_TRUE(check_invariants(h).empty()) << test::describe(check_invariants(h));
+}
+
 // A leaf without hanging vertices is cut along its shorter diagonal, so that its two triangles are as little
 // stretched as they can be and smooth shading follows the nearer corners. In the parallelogram (0,0) (2,0) (3,1)
 // (1,1) the diagonal from (2,0) to (1,1) (length sqrt 2) is the shorter one; (0,0) to (3,1) is sqrt 10.
