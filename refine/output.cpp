@@ -25,15 +25,19 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
   std::vector<Rgb> values;
   std::vector<double> areas;
   // Emitters clip to white: a lamp of a few percent of the area, often 10-100x brighter than what it lights,
-  // would otherwise set the exposure and leave the lit surfaces dark. Only when every surface emits (the furnace)
-  // do the emitters set it.
+  // would otherwise set the exposure and leave the lit surfaces dark. Only when no surface that does not emit is
+  // lit (every surface emits, as in the furnace, or the lamps light nothing) do the emitters set it: a lamp of
+  // Ke 0.01 over an unlit floor was drawn at exposure 1, nearly black.
+  const auto lit = [](const Rgb& value) { return value.max_component() > 0.0; };
   for (const bool emitters : {false, true}) {
+    values.clear();
+    areas.clear();
     for (mesh::NodeId leaf : hierarchy.leaves()) {
       if (!emitters && scene.material_of_surface(hierarchy.surface(leaf)).emission.max_component() > 0.0) continue;
       values.push_back(displayed[leaf]);
       areas.push_back(hierarchy.area(leaf));
     }
-    if (!values.empty()) break;
+    if (std::any_of(values.begin(), values.end(), lit)) break;
   }
   return ToneMap::from_percentile(values, areas, 0.99);
 }

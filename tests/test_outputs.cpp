@@ -446,6 +446,32 @@ TEST(OutputsToneMap, EmittersDoNotSetTheExposure) {
   EXPECT_DOUBLE_EQ(solution_tone_map(solver, displayed).exposure, 1.0 / brightest);
 }
 
+// A lamp that lights nothing (facing away from the only other surface) leaves every surface that does not emit
+// black: then the lamp sets the exposure and shows white, where exposure 1 drew a lamp of 0.01 nearly black.
+TEST(OutputsToneMap, EmittersSetTheExposureWhenNothingElseIsLit) {
+  Scene scene;
+  scene.name = "lamp facing away";
+  const std::uint32_t lamp = scene.add_group("lamp"), floor = scene.add_group("floor");
+  const std::uint32_t glowing = scene.add_material({"glow", Rgb(0.0), Rgb(0.01)});
+  const std::uint32_t white = scene.add_material({"white", Rgb(0.5), Rgb(0.0)});
+  scene.add_face(lamp, glowing, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}});  // facing up, away from the floor
+  scene.add_face(floor, white, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  scene.build_surfaces();
+  SolverOptions options;
+  options.adaptive = false;
+  options.meshing.patch_size = 1.0;
+  options.meshing.element_size = 1.0;
+  Solver solver(scene, options);
+  solver.run();
+  const std::vector<Rgb> displayed = solver.displayed_radiosity();
+  for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
+    if (scene.groups[scene.surfaces[solver.hierarchy().surface(leaf)].group].name == "floor") {
+      ASSERT_EQ(displayed[leaf].max_component(), 0.0);
+    }
+  }
+  EXPECT_DOUBLE_EQ(solution_tone_map(solver, displayed).exposure, 1.0 / 0.01);
+}
+
 // The report's numbers for the furnace (E = 1, rho = 0.5 everywhere: B = E / (1 - rho) = 2 on every surface): the
 // room of 4 x 3 x 5 (area 94), block_a 1 x 0.9 x 1.2 (area 6.36, six faces of its group) and block_b 1 x 0.9 x 0.7
 // (area 4.46) emit 104.82; each group's mean radiosity is its leaves' area-weighted mean, within a few per cent of 2
