@@ -107,6 +107,50 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
   EXPECT_GT(report["elements"].get<long long>(), 0);
 }
 
+// A SIGINT the parent set to be ignored stays ignored: a shell starts a background job (`aarad solve ... &`) so, and
+// a Ctrl-C meant for the script that started it stopped the solve (exit 130, "interrupted": true).
+TEST(SolverInterrupt, AnIgnoredSigintStaysIgnored) {
+  const std::string binary = AARAD_BINARY_DIR "/apps/aarad/aarad";
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "ignored";
+  fs::remove_all(out);
+  int stderr_pipe[2];
+  ASSERT_EQ(pipe(stderr_pipe), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    dup2(stderr_pipe[1], STDERR_FILENO);
+    close(stderr_pipe[0]);
+    close(stderr_pipe[1]);
+    std::signal(SIGINT, SIG_IGN);  // kept across exec, as a shell does for a background job
+    execl(binary.c_str(), binary.c_str(), "solve", "cornell", "--max-shots", "300", "--width", "16", "--height", "16",
+          "--out", out.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  close(stderr_pipe[1]);
+  FILE* child_stderr = fdopen(stderr_pipe[0], "r");
+  ASSERT_NE(child_stderr, nullptr);
+  std::string everything;
+  char line[4096];
+  int signals = 0;
+  while (std::fgets(line, sizeof line, child_stderr) != nullptr) {
+    everything += line;
+    if (std::string(line).rfind("aarad: shot ", 0) == 0 && signals < 3) {
+      ASSERT_EQ(kill(child, SIGINT), 0);
+      ++signals;
+    }
+  }
+  std::fclose(child_stderr);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_GT(signals, 0) << "no progress line seen; stderr:\n" << everything;
+  ASSERT_TRUE(WIFEXITED(status)) << everything;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << everything;
+  std::ifstream in(out / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["interrupted"], false);
+  EXPECT_EQ(report["shots"].get<long long>(), 300);
+}
+
 // `aarad solve cornell` writing 2048 x 2048 images (about 1.2 s of writing, so that a Ctrl-C sent when mesh.ply
 // appears arrives while the images are written, even on a busy machine) into `out`, as a child process
 // whose stderr the test reads through a pipe (stdout goes to /dev/null).

@@ -59,7 +59,9 @@ extern "C" void on_sigint_while_writing(int) {
   }
 }
 
-// Handles SIGINT with the handler given last to handle(), and restores the previous handling when it ends.
+// Handles SIGINT with the handler given last to handle(), and restores the previous handling when it ends. A SIGINT
+// the parent set to be ignored stays ignored: a shell runs a background job (`aarad solve ... &`) so, and a Ctrl-C
+// meant for the script that started it interrupted the solve.
 class SigintGuard {
  public:
   SigintGuard() { sigaction(SIGINT, nullptr, &previous_); }
@@ -69,6 +71,7 @@ class SigintGuard {
 
   // SA_RESTART: a write to a pipe that a Ctrl-C interrupts goes on instead of failing with EINTR.
   void handle(void (*handler)(int), int flags) {
+    if (previous_.sa_handler == SIG_IGN && !(previous_.sa_flags & SA_SIGINFO)) return;
     struct sigaction action {};
     action.sa_handler = handler;
     sigemptyset(&action.sa_mask);
