@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -524,6 +525,27 @@ void Hierarchy::split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_
   }
 }
 
+// In a balanced mesh a leaf's coarser edge-neighbours are one level coarser, and splitting one of them makes no
+// new coarser neighbour for the leaf: the leaves split_coarser_neighbours splits are the coarser neighbours of the
+// leaf, theirs, and so on, as the mesh stands before it starts.
+NodeId Hierarchy::balance_blocker(NodeId node, Refusal& why) const {
+  std::vector<NodeId> pending{node}, neighbours;
+  std::set<NodeId> seen{node};
+  while (!pending.empty()) {
+    const NodeId at = pending.back();
+    pending.pop_back();
+    edge_neighbours(at, neighbours);
+    for (const NodeId nb : neighbours) {
+      if (impl_->level[nb] >= impl_->level[at] || !seen.insert(nb).second) continue;
+      double smallest = 0.0;
+      why = refusal(nb, smallest);
+      if (why != Refusal::kNone) return nb;
+      pending.push_back(nb);
+    }
+  }
+  return kNoNode;
+}
+
 Hierarchy::Refusal Hierarchy::refusal(NodeId node, double& smallest) const {
   const Impl& m = *impl_;
   if (node >= node_count()) return Refusal::kMissing;
@@ -573,7 +595,9 @@ Hierarchy::Refusal Hierarchy::refusal(NodeId node, double& smallest) const {
 
 bool Hierarchy::can_split(NodeId node) const {
   double smallest = 0.0;
-  return refusal(node, smallest) == Refusal::kNone;
+  if (refusal(node, smallest) != Refusal::kNone) return false;
+  Refusal why = Refusal::kNone;
+  return !impl_->options.balance || balance_blocker(node, why) == kNoNode;
 }
 
 SplitResult Hierarchy::split(NodeId node) {
@@ -600,7 +624,22 @@ SplitResult Hierarchy::split(NodeId node) {
                       "two corners at one point";
       return result;
   }
-  if (m.options.balance) split_coarser_neighbours(node, result.also_split);
+  if (m.options.balance) {
+    // Balancing splits coarser neighbours first, and theirs in turn: each must take its split, or this one is
+    // refused. Split regardless, they went below min_area and past max_level, and at the last levels floating
+    // point holds into children of no area, turned clockwise (a reviewer's --balance solves).
+    Refusal why = Refusal::kNone;
+    const NodeId blocker = balance_blocker(node, why);
+    if (blocker != kNoNode) {
+      static constexpr const char* kWhy[] = {"", "is missing", "is not a leaf", "is at the maximum level",
+                                             "would have a child below min_area", "is too small to split in "
+                                             "floating point"};
+      result.reason = "node " + std::to_string(node) + ": balancing would split node " + std::to_string(blocker) +
+                      ", which " + kWhy[static_cast<int>(why)];
+      return result;
+    }
+    split_coarser_neighbours(node, result.also_split);
+  }
   const std::array<NodeId, 4> ids = split_leaf(node);
   result.children.assign(ids.begin(), ids.end());
   result.ok = true;

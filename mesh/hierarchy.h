@@ -152,6 +152,9 @@ class Hierarchy {
   std::array<NodeId, 4> split_leaf(NodeId node);  // the split itself, no checks
   void require_leaf(NodeId node, const char* query) const;  // throws aarad::Error unless `node` is a leaf
   void split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_split);
+  // With balance: the first leaf that split_coarser_neighbours(node) would split and that refuses a split (its
+  // refusal in `why`), or kNoNode.
+  NodeId balance_blocker(NodeId node, Refusal& why) const;
 
   std::unique_ptr<Impl> impl_;
 };

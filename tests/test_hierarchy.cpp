@@ -582,6 +582,44 @@ TEST(HierarchySplit, LeavesTooSmallForFloatingPointAreNotSplit) {
   }
 }
 
+// Balancing splits a leaf's coarser neighbours first, and theirs in turn; each of them must take the split as the
+// leaf itself must, or the leaf's split is refused. They were split regardless: a reviewer's balanced Cornell box
+// solve at --min-area 30 had elements of 28.19 (its initial elements differ in size, so a neighbour's children can
+// be smaller than the leaf's), and deep balanced solves made children of no area, turned clockwise.
+TEST(HierarchySplit, BalanceRefusesASplitThatWouldSplitANeighbourBeyondTheLimits) {
+  const Scene scene = make_cornell_box();
+  MeshingOptions o;
+  o.patch_size = 140.0;
+  o.element_size = 70.0;
+  o.min_area = 30.0;
+  o.max_level = 12;
+  o.balance = true;
+  Hierarchy h(scene, o);
+  std::size_t refused_for_balance = 0;
+  // Every initial element split, and then its children: each child at level 3 forces its level-1 neighbours to
+  // split, some of them smaller initial elements (the floor's triangles round the blocks' footprints).
+  for (const NodeId leaf : h.leaves()) {
+    if (!h.is_leaf(leaf) || h.level(leaf) != 1) continue;
+    const SplitResult r = h.split(leaf);
+    if (!r.ok) continue;
+    for (const NodeId child : r.children) {
+      const SplitResult deeper = h.split(child);
+      if (!deeper.ok && deeper.reason.find("balancing") != std::string::npos) {
+        ++refused_for_balance;
+        EXPECT_FALSE(h.can_split(child));
+      }
+    }
+  }
+  EXPECT_GT(refused_for_balance, 0u);
+  for (const NodeId leaf : h.leaves()) {
+    if (h.level(leaf) > 1) {
+      EXPECT_GE(h.area(leaf), 30.0) << leaf;
+    }
+  }
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << describe(violations);
+}
+
 TEST(HierarchySplit, BalanceSplitsCoarserNeighboursFirst) {
   MeshingOptions o = sizes(2.0, 1.0);
   o.balance = true;
