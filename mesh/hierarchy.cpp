@@ -219,6 +219,41 @@ NodeId Hierarchy::Impl::add_node(NodeId parent_id, int node_level, NodeId patch_
   return id;
 }
 
+namespace {
+
+// Room for `extra` more elements in `v`, doubling as push_back would.
+template <class T>
+void make_room(std::vector<T>& v, std::size_t extra) {
+  if (v.size() + extra > v.capacity()) v.reserve(std::max(v.size() + extra, 2 * v.capacity()));
+}
+
+}  // namespace
+
+void Hierarchy::Impl::make_room_for_split() {
+  make_room(parent, 4);
+  make_room(child_begin, 4);
+  make_room(child_count, 4);
+  make_room(child_ids, 4);
+  make_room(patch_of, 4);
+  make_room(surface, 4);
+  make_room(level, 4);
+  make_room(corners, 4);
+  make_room(area, 4);
+  make_room(radiosity, 4);
+  make_room(unshot, 4);
+  make_room(face, 4);
+  make_room(loop_revision, 4);
+  // A split adds at most 5 vertices (4 edge midpoints and a quad's centre), 8 edges (4 edge halves and 4 cuts
+  // inside the leaf) and 3 faces.
+  const std::array<std::size_t, 3> needed{mesh.n_vertices() + 5, mesh.n_edges() + 8, mesh.n_faces() + 3};
+  if (needed[0] > mesh_room[0] || needed[1] > mesh_room[1] || needed[2] > mesh_room[2]) {
+    std::array<std::size_t, 3> room;
+    for (std::size_t k = 0; k < 3; ++k) room[k] = std::max(needed[k], 2 * mesh_room[k]);
+    mesh.reserve(room[0], room[1], room[2]);
+    mesh_room = room;
+  }
+}
+
 double Hierarchy::Impl::corner_area(NodeId node) const {
   std::array<Vec3, 4> p;
   const int n = corner_count(node);
@@ -447,6 +482,9 @@ std::vector<NodeId> Hierarchy::edge_neighbours(NodeId node) const {
 
 std::array<NodeId, 4> Hierarchy::split_leaf(NodeId node) {
   Impl& m = *impl_;
+  // Every allocation first: out of memory in the middle of a split (the mesh cut, a node with four children not yet
+  // added) left a hierarchy that crashed the solver's finish() (Solver::run keeps the solution so far readable).
+  m.make_room_for_split();
   LeafMesh& mesh = m.mesh;
   ++m.revision;  // the children's and the neighbours' loop_revision
   const FaceHandle f(m.face[node]);
@@ -640,6 +678,7 @@ SplitResult Hierarchy::split(NodeId node) {
     }
     split_coarser_neighbours(node, result.also_split);
   }
+  result.children.reserve(4);  // before the split, which then allocates nothing after it has begun
   const std::array<NodeId, 4> ids = split_leaf(node);
   result.children.assign(ids.begin(), ids.end());
   result.ok = true;

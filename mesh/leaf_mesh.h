@@ -63,10 +63,15 @@ struct Hierarchy::Impl {
   std::size_t initial_elements = 0;
   std::size_t leaf_count = 0;
   std::uint64_t revision = 0;
+  // The vertices, edges and faces the mesh has room for (LeafMesh::reserve; OpenMesh does not report it).
+  std::array<std::size_t, 3> mesh_room{0, 0, 0};
 
   // Appends a node, made at the current revision; returns its id.
   NodeId add_node(NodeId parent_id, int node_level, NodeId patch_id, std::uint32_t surface_id,
                   const std::array<int, 4>& corner_vertices);
+  // Room for one more split in every array it grows (the node arrays, the mesh's elements and properties), reserved
+  // ahead in doubling steps: memory that runs out then throws here, before the split has changed anything.
+  void make_room_for_split();
   int corner_count(NodeId node) const { return corners[node][3] < 0 ? 3 : 4; }
   Vec3 point(int vertex) const { return to_vec3(mesh.point(LeafMesh::VertexHandle(vertex))); }
   double corner_area(NodeId node) const;
