@@ -51,6 +51,7 @@ nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violati
       {"resolution", options.resolution},
       {"converged", solver.converged()},
       {"interrupted", solver.interrupted()},
+      {"diverged", solver.diverged()},
       {"shots", solver.shots()},
       {"unshot_fraction", solver.unshot_fraction()},
       {"emitted_flux", rgb_json(solver.emitted_flux())},

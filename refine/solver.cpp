@@ -920,6 +920,7 @@ void Solver::run(const std::function<bool(const Progress&)>& keep_going) {
   const double total_before = times_.total;
   converged_ = false;
   interrupted_ = false;
+  diverged_ = false;
   // Whatever stops the loop, an exception too (from keep_going or a back end), leaves a solution to read: inner
   // nodes pulled up and the time counted. A solve stopped by an exception counts as interrupted.
   const auto finish = [&] {
@@ -945,6 +946,10 @@ void Solver::shooting_loop(const std::function<bool(const Progress&)>& keep_goin
       break;
     }
     if (shots_ >= options_.max_shots) break;
+    if (scan.unshot_fraction > kDivergedUnshot) {
+      diverged_ = true;
+      break;
+    }
     if (!shoot(scan)) {
       converged_ = true;  // nothing left to shoot
       break;

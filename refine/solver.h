@@ -68,6 +68,10 @@ struct SolverOptions {
 // data/scenes/), otherwise the hierarchy's own defaults (zeros).
 mesh::MeshingOptions default_meshing(const Scene& scene);
 
+// run() stops when the unshot flux exceeds this many times the emitted flux: plain shooting only lowers it (it starts
+// at 1), and over-relaxation or overshooting lift it by a fraction of it, never tenfold.
+inline constexpr double kDivergedUnshot = 10.0;
+
 struct Progress {
   std::int64_t shots = 0;
   double unshot_fraction = 1.0;
@@ -113,6 +117,10 @@ class Solver {
 
   bool converged() const { return converged_; }
   bool interrupted() const { return interrupted_; }
+  // Whether run() stopped because the unshot flux grew past kDivergedUnshot times the emitted flux: form factors
+  // from a patch that add up to more than 1 (the analytic back end ignores what hides one surface from another)
+  // feed back more than they absorb, and the loop never converges.
+  bool diverged() const { return diverged_; }
   std::int64_t shots() const { return shots_; }
 
   // Fluxes per channel (radiosity x area): emitted sum E A; absorbed so far sum (1 - rho) x incident flux;
@@ -326,6 +334,7 @@ class Solver {
   mesh::NodeId last_shooter_ = mesh::kNoNode;
   std::int64_t splits_ = 0;
   bool converged_ = false;
+  bool diverged_ = false;
   bool interrupted_ = false;
   SolverTimes times_;
 };

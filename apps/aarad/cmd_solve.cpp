@@ -298,6 +298,7 @@ void run_solve(SolveCommandOptions options) {
       std::FILE* summary = options.json ? stderr : stdout;
       const char* state = solver.converged()     ? "converged"
                           : solver.interrupted() ? "interrupted"
+                          : solver.diverged()    ? "diverged"
                                                  : "stopped at --max-shots";
       std::fprintf(summary, "aarad: %s after %lld shots (unshot %.3f %%), %zu elements, max level %d, %.2f s\n",
                    state, static_cast<long long>(solver.shots()), 100.0 * solver.unshot_fraction(),
@@ -313,8 +314,17 @@ void run_solve(SolveCommandOptions options) {
     }
   }
   // The report describes the solve ("interrupted" when a Ctrl-C stopped the shots); a Ctrl-C while the files were
-  // written also gives 130.
-  set_exit_code(g_interrupts.load() > 0 ? 130 : 0);
+  // written also gives 130. A solve that diverged wrote what it had, for a look, and fails.
+  if (solver.diverged()) {
+    std::fprintf(stderr,
+                 "aarad: error: the solve diverged: after %lld shots the unshot flux is %.3g times the emitted flux; "
+                 "the form factors from some patch add up to more than 1%s\n",
+                 static_cast<long long>(solver.shots()), solver.unshot_fraction(),
+                 options.solver.backend == "analytic"
+                     ? " (the analytic back end ignores what hides one surface from another): use --ff aa-hemicube"
+                     : "");
+  }
+  set_exit_code(g_interrupts.load() > 0 ? 130 : solver.diverged() ? 1 : 0);
 }
 
 }  // namespace
