@@ -56,6 +56,13 @@ struct SolverOptions {
   // again takes them, shooting only into the leaves split since, whose pieces share the factor the leaf had. The
   // least recently used patches' factors are given up beyond it; 0 computes every shot afresh (docs/solver.md).
   std::int64_t factor_cache_mib = 2048;
+  // The most leaf elements adaptive substructuring may make: a split that would take the leaf count beyond it (with
+  // the coarser neighbours `balance` would split first) is refused, as one below min_area is, and the solve goes on
+  // with the mesh it has (element_limit_reached()). It bounds memory, about 1 KiB per leaf besides the factor cache
+  // (docs/solver.md, "Adaptive substructuring"): at 3 million a solve peaked at 3.6 GiB (4 million needed more than
+  // 6 GB of address space). The initial meshing has its own limit (MeshingOptions::max_initial_elements); initial
+  // elements beyond this one are kept, and none splits.
+  std::int64_t max_elements = 3'000'000;
   // Patch and element sizes, max level, min area, balance. The default is the hierarchy's (zeros: sizes relative
   // to the scene's diagonal), not what `aarad solve` uses for a scene that names its sizes (the built-in Cornell
   // box and office, an OBJ file with "# aarad meshing:"): set it to default_meshing(scene) to solve as the program
@@ -153,6 +160,8 @@ class Solver {
   int max_leaf_level() const;
   // Number of leaves split by substructuring so far (balancing splits included).
   std::int64_t splits() const { return splits_; }
+  // Whether substructuring refused a split because the leaves would have been more than SolverOptions::max_elements.
+  bool element_limit_reached() const { return element_limit_reached_; }
   // Shots that took their patch's factors from its previous shot (SolverOptions::factor_cache_mib), and the
   // memory those factors take now.
   std::int64_t reused_shots() const { return reused_shots_; }
@@ -214,6 +223,8 @@ class Solver {
   std::vector<mesh::NodeId> steep_leaves_of_shot();
   std::vector<mesh::NodeId> steep_leaves_among(std::span<const mesh::NodeId> new_leaves);
   std::vector<mesh::NodeId> split_candidates(std::span<const mesh::NodeId> candidates);
+  // Whether split(candidate) keeps the leaf count within SolverOptions::max_elements.
+  bool split_fits_element_limit(mesh::NodeId candidate);
   // Copies the factors of the receivers the shot reached (touched_, ff_) into received_factor_, by leaf.
   void record_shot_factors();
   void take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
@@ -268,6 +279,10 @@ class Solver {
   // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
   // shot after shot: the refusal is asked once instead of recomputing the children's areas every time.
   std::vector<std::uint8_t> refused_;
+  // split_fits_element_limit's scratch: the leaves a split with balancing would split, a mark per NodeId (0 between
+  // calls), and edge-neighbours.
+  std::vector<mesh::NodeId> forced_, forced_around_;
+  std::vector<std::uint8_t> forced_mark_;
   // The receivers that got flux from the current shot: the first touched_count_ entries (the vector only grows).
   std::vector<std::uint32_t> touched_;
   std::size_t touched_count_ = 0;
@@ -333,6 +348,7 @@ class Solver {
   std::int64_t shots_ = 0;
   mesh::NodeId last_shooter_ = mesh::kNoNode;
   std::int64_t splits_ = 0;
+  bool element_limit_reached_ = false;
   bool converged_ = false;
   bool diverged_ = false;
   bool interrupted_ = false;

@@ -14,6 +14,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 
@@ -652,6 +653,64 @@ TEST(SolverOptionsCheck, MessagesNameTheFieldTheOptionAndTheValue) {
   options = one_patch_per_face(1);
   options.shooter_samples = 65;
   EXPECT_EQ(message(options), "solver: SolverOptions::shooter_samples (--shooter-samples) must be in [1, 64], got 65");
+}
+
+TEST(SolverOptionsCheck, AnElementLimitBelowOneIsRefused) {
+  const Scene scene = test::unit_cube();
+  SolverOptions options = one_patch_per_face(1);
+  for (const std::int64_t limit : {std::int64_t{0}, std::int64_t{-5}}) {
+    options.max_elements = limit;
+    try {
+      const Solver solver(scene, options);
+      ADD_FAILURE() << "max_elements " << limit << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()), "solver: SolverOptions::max_elements (--max-elements) must be >= 1, got " +
+                                           std::to_string(limit));
+    }
+  }
+  options.max_elements = 1;  // fewer than the initial elements: none splits, and the solve runs
+  Solver solver(scene, options);
+  solver.run();
+  EXPECT_TRUE(solver.converged());
+}
+
+// A lamp 2 cm wide, 3 cm above a floor of 1 m cut into 16 elements: its one shot refines the floor under it to level
+// 8, and with balancing a split near the limit often splits coarser neighbours first. They count towards the limit:
+// counting only the split leaf's 3 new leaves, 24 of the limits from 20 to 200 were exceeded (60 with 65 leaves).
+TEST(SolverElementLimit, TheNeighboursBalancingSplitsCountTowardsTheLimit) {
+  Scene scene;
+  scene.name = "lamp-over-floor";
+  const auto white = scene.add_material({"white", Rgb(0.5), Rgb(0.0)});
+  const auto lamp = scene.add_material({"lamp", Rgb(0.0), Rgb(50.0)});
+  test::add_facing(scene, scene.add_group("floor"), white, {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}, {0, 1, 0});
+  test::add_facing(scene, scene.add_group("lamp"), lamp,
+                   {{0.30, 0.03, 0.30}, {0.32, 0.03, 0.30}, {0.32, 0.03, 0.32}, {0.30, 0.03, 0.32}}, {0, -1, 0});
+  scene.build_surfaces();
+  SolverOptions options;
+  options.gradient = 0.05;
+  options.max_shots = 1;
+  options.meshing = {.patch_size = 0.5, .element_size = 0.25, .min_area = 1e-9, .balance = true};
+  options.max_elements = 1000000;
+  std::size_t unlimited_leaves = 0;
+  {
+    Solver solver(scene, options);
+    solver.run();
+    unlimited_leaves = solver.hierarchy().leaf_count();
+    EXPECT_FALSE(solver.element_limit_reached());
+    EXPECT_EQ(solver.max_leaf_level(), 8);
+  }
+  for (std::int64_t limit = 20; limit <= 200; ++limit) {
+    options.max_elements = limit;
+    Solver solver(scene, options);
+    solver.run();
+    const std::size_t leaves = solver.hierarchy().leaf_count();
+    EXPECT_LE(leaves, static_cast<std::size_t>(limit)) << "limit " << limit;
+    EXPECT_TRUE(solver.element_limit_reached()) << "limit " << limit;
+    for (const mesh::Violation& v : mesh::check_invariants(solver.hierarchy())) {
+      ADD_FAILURE() << "limit " << limit << ": " << v.invariant << ": " << v.message;
+    }
+  }
+  EXPECT_GT(unlimited_leaves, 1000u);
 }
 
 // The solver reads the scene through a reference for its whole life: Solver(load_scene("cornell"), options) used to

@@ -4,6 +4,7 @@
 // than in the middle of the back wall.
 #include "core/builtin_scenes.h"
 #include "mesh/invariants.h"
+#include "refine/report.h"
 #include "refine/solver.h"
 
 #include <gtest/gtest.h>
@@ -28,13 +29,17 @@ const Scene& cornell() {
   return scene;
 }
 
-// global_control only caps the threads; an arena with that many slots makes them available even on a runner
-// with fewer CPUs, where the default arena would have fewer.
-CornellRun solve_cornell(int threads) {
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-  tbb::task_arena arena(threads);
+SolverOptions cornell_options() {
   SolverOptions options;
   options.meshing = default_meshing(cornell());
+  return options;
+}
+
+// global_control only caps the threads; an arena with that many slots makes them available even on a runner
+// with fewer CPUs, where the default arena would have fewer.
+CornellRun solve_cornell(int threads, const SolverOptions& options = cornell_options()) {
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  tbb::task_arena arena(threads);
   CornellRun run{std::make_unique<Solver>(cornell(), options), {}};
   arena.execute([&] {
     EXPECT_EQ(tbb::this_task_arena::max_concurrency(), threads);
@@ -152,6 +157,69 @@ TEST(SolverCornell, MeshIsFinerAlongShadowEdgesThanInTheBackWallMiddle) {
               floor_leaves_near_blocks, back_wall_middle);
   ASSERT_GE(back_wall_middle, 0);
   EXPECT_GT(floor_near_blocks, back_wall_middle);
+}
+
+// SolverOptions::max_elements. With --gradient 0.01 the box splits from 1 504 initial elements into 10 117 leaves
+// (10 006 with balancing); limited to 1 600, substructuring stops there and the solve converges with that mesh.
+SolverOptions limited_cornell_options(bool balance) {
+  SolverOptions options = cornell_options();
+  options.gradient = 0.01;
+  options.meshing.balance = balance;
+  options.max_elements = 1600;
+  return options;
+}
+
+TEST(SolverElementLimit, SplittingStopsAtTheLimitAndTheSolveConvergesWithItsMesh) {
+  for (const bool balance : {false, true}) {
+    SCOPED_TRACE(balance ? "balanced" : "not balanced");
+    Solver solver(cornell(), limited_cornell_options(balance));
+    ASSERT_EQ(solver.hierarchy().leaf_count(), 1504u);
+    solver.run();
+    EXPECT_TRUE(solver.converged());
+    EXPECT_TRUE(solver.element_limit_reached());
+    EXPECT_LE(solver.hierarchy().leaf_count(), 1600u);
+    EXPECT_GT(solver.hierarchy().leaf_count(), 1590u);  // it split up to the limit
+    const std::vector<mesh::Violation> violations = mesh::check_invariants(solver.hierarchy());
+    for (const mesh::Violation& v : violations) ADD_FAILURE() << v.invariant << ": " << v.message;
+    const nlohmann::json report = make_report(solver, violations);
+    EXPECT_EQ(report["element_limit_reached"], true);
+    EXPECT_EQ(report["options"]["max_elements"], 1600);
+    EXPECT_EQ(report["elements"], solver.hierarchy().leaf_count());
+  }
+}
+
+// A limit the solve never goes beyond changes nothing: the default solve ends with 1 588 leaves, and so does one
+// limited to exactly that many, with the same radiosities bit for bit.
+TEST(SolverElementLimit, ALimitTheSolveDoesNotExceedChangesNothingAndIsNotReported) {
+  const CornellRun& unlimited = one_thread();
+  EXPECT_FALSE(unlimited.solver->element_limit_reached());
+  EXPECT_EQ(make_report(*unlimited.solver, {})["element_limit_reached"], false);
+  SolverOptions options = cornell_options();
+  options.max_elements = static_cast<std::int64_t>(unlimited.solver->hierarchy().leaf_count());
+  const CornellRun limited = solve_cornell(1, options);
+  EXPECT_FALSE(limited.solver->element_limit_reached());
+  EXPECT_EQ(limited.solver->shots(), unlimited.solver->shots());
+  ASSERT_EQ(limited.radiosity.size(), unlimited.radiosity.size());
+  for (std::size_t i = 0; i < limited.radiosity.size(); ++i) {
+    ASSERT_EQ(limited.radiosity[i], unlimited.radiosity[i]) << "node " << i;
+  }
+}
+
+// The splits refused at the limit are decided in the order the splits are made, on one thread.
+TEST(SolverElementLimit, SameMeshAndNumbersWithOneAndTwoThreadsAtTheLimit) {
+  for (const bool balance : {false, true}) {
+    SCOPED_TRACE(balance ? "balanced" : "not balanced");
+    const CornellRun one = solve_cornell(1, limited_cornell_options(balance));
+    const CornellRun two = solve_cornell(2, limited_cornell_options(balance));
+    EXPECT_TRUE(one.solver->element_limit_reached());
+    EXPECT_TRUE(two.solver->element_limit_reached());
+    ASSERT_EQ(one.solver->shots(), two.solver->shots());
+    ASSERT_EQ(one.solver->hierarchy().leaves(), two.solver->hierarchy().leaves());
+    ASSERT_EQ(one.radiosity.size(), two.radiosity.size());
+    for (std::size_t i = 0; i < one.radiosity.size(); ++i) {
+      ASSERT_EQ(one.radiosity[i], two.radiosity[i]) << "node " << i;
+    }
+  }
 }
 
 }  // namespace
