@@ -169,6 +169,11 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
       {"solve --width 0", "must be a whole number in [1, 16384]"},
       {"solve --shooter-samples 99999999999999999999", "must be a whole number in [1, 64]"},
       {"solve --factor-cache -1", "must be a whole number in [0, 1073741824]"},
+      {"solve --max-elements 0", "Value 0 must be a whole number >= 1"},
+      {"solve --max-elements -4", "Value -4 must be a whole number >= 1"},
+      {"solve --max-elements 2.5", "Value 2.5 must be a whole number >= 1"},
+      {"solve --max-elements 4e6", "Value 4e6 must be a whole number >= 1"},
+      {"solve --max-elements 99999999999999999999", "must be a whole number >= 1"},
       {"formfactors cornell --from light --resolution 2.0", "must be a whole number in [2, 8192]"},
   };
   for (const auto& [command, expected] : cases) {
@@ -395,6 +400,33 @@ TEST(Cli, SolveSaysHowMuchLightLeavesAnOpenSceneAndWarnsWhenNoneLands) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("warning: only 0.00"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("% of the light shot reached a surface"), std::string::npos) << r.err;
+}
+
+// --max-elements: substructuring stops splitting at the limit, the solve goes on to the end, and the user is told
+// once on stderr (with --quiet too) and in the report. With --gradient 0.01 the box would split into 10 117 leaves.
+TEST(Cli, SolveWarnsOnceAndReportsWhenSubstructuringReachesMaxElements) {
+  const fs::path dir = work_dir();
+  const std::string warning = "warning: substructuring reached the limit of 1600 elements (--max-elements)";
+  ProgramRun r = aarad("solve cornell --gradient 0.01 --max-elements 1600 --width 8 --height 8 --json --quiet --out " +
+                       (dir / "limited").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::size_t at = r.err.find(warning);
+  EXPECT_NE(at, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(warning, at + 1), std::string::npos) << r.err;
+  nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["element_limit_reached"], true);
+  EXPECT_EQ(report["converged"], true);
+  EXPECT_LE(report["elements"].get<int>(), 1600);
+  EXPECT_EQ(report["options"]["max_elements"], 1600);
+  EXPECT_TRUE(report["invariants"]["violations"].empty());
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir / "limited" / "report.json")), report);
+
+  r = aarad("solve cornell --max-shots 40 --width 8 --height 8 --json --quiet --out " + (dir / "default").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("--max-elements"), std::string::npos) << r.err;
+  report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["element_limit_reached"], false);
+  EXPECT_EQ(report["options"]["max_elements"], 3000000);
 }
 
 // Names are bytes from the user's file: a Latin-1 group name is not UTF-8, and the JSON reports carry it with a

@@ -233,6 +233,15 @@ void run_solve(SolveCommandOptions options) {
                    amount);
     }
 
+    // Once, even with --quiet: the mesh is coarser than --gradient asks where splits were refused.
+    if (solver.element_limit_reached()) {
+      std::fprintf(stderr,
+                   "aarad: warning: substructuring reached the limit of %lld elements (--max-elements) and split "
+                   "no further, so the mesh is coarser than --gradient asks; raise --max-elements (each element "
+                   "takes about 1 KiB), --gradient or --min-area, or lower --max-level\n",
+                   static_cast<long long>(solver_options.max_elements));
+    }
+
     // radiosity.exr stores single precision: beyond it, a pixel is inf, and below it 0 or coarse (mesh.ply switches
     // to doubles there, and the PNGs are tone-mapped from values scaled into range).
     const std::vector<Rgb> displayed = solver.displayed_radiosity();
@@ -384,6 +393,10 @@ void add_solve_command(CLI::App& app) {
                   "MiB for each patch's last form factors, reused when it shoots again, shooting only into the "
                   "elements split since (0: every shot computed afresh)")
       ->transform(whole_number_in(0, std::int64_t{1} << 30))
+      ->capture_default_str();
+  cmd->add_option("--max-elements", options->solver.max_elements,
+                  "Most leaf elements substructuring may make; beyond it, it splits no further and says so")
+      ->transform(whole_number_in(1))
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Worker threads (0: all cores) [0, 1024]")
       ->transform(whole_number_in(0, 1024))
