@@ -27,27 +27,41 @@ namespace {
 
 namespace fs = std::filesystem;
 
-TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
+// `aarad solve ARGS` started as a child process whose stderr the test reads through a pipe (a pipe, not a terminal:
+// progress comes as lines, the first one after the first shot). With `ignore_sigint` the child starts with SIGINT
+// ignored, as a shell starts a background job.
+struct SolveChild {
+  pid_t pid = -1;
+  FILE* err = nullptr;
+};
+SolveChild start_solve(std::vector<std::string> args, bool ignore_sigint = false) {
   const std::string binary = AARAD_BINARY_DIR "/apps/aarad/aarad";
-  ASSERT_TRUE(fs::exists(binary)) << binary;
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "cornell";
-  fs::remove_all(out);
-
+  EXPECT_TRUE(fs::exists(binary)) << binary;
+  args.insert(args.begin(), {binary, "solve"});
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
   int stderr_pipe[2];
-  ASSERT_EQ(pipe(stderr_pipe), 0);
+  if (pipe(stderr_pipe) != 0) return {};
   const pid_t child = fork();
-  ASSERT_GE(child, 0);
   if (child == 0) {
     dup2(stderr_pipe[1], STDERR_FILENO);
     close(stderr_pipe[0]);
     close(stderr_pipe[1]);
-    // stderr is a pipe, not a terminal: progress comes as lines, the first one after the first shot.
-    execl(binary.c_str(), binary.c_str(), "solve", "cornell", "--converge", "1e-9", "--max-shots", "1000000",
-          "--width", "96", "--height", "96", "--out", out.c_str(), static_cast<char*>(nullptr));
+    if (ignore_sigint) std::signal(SIGINT, SIG_IGN);  // kept across exec
+    execv(binary.c_str(), argv.data());
     _exit(127);
   }
   close(stderr_pipe[1]);
-  FILE* child_stderr = fdopen(stderr_pipe[0], "r");
+  return {child, child > 0 ? fdopen(stderr_pipe[0], "r") : nullptr};
+}
+
+TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "cornell";
+  fs::remove_all(out);
+  const auto [child, child_stderr] = start_solve({"cornell", "--converge", "1e-9", "--max-shots", "1000000", "--width",
+                                                  "96", "--height", "96", "--out", out.string()});
+  ASSERT_GT(child, 0);
   ASSERT_NE(child_stderr, nullptr);
   std::string everything;
   char line[4096];
@@ -110,24 +124,11 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
 // A SIGINT the parent set to be ignored stays ignored: a shell starts a background job (`aarad solve ... &`) so, and
 // a Ctrl-C meant for the script that started it stopped the solve (exit 130, "interrupted": true).
 TEST(SolverInterrupt, AnIgnoredSigintStaysIgnored) {
-  const std::string binary = AARAD_BINARY_DIR "/apps/aarad/aarad";
   const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "ignored";
   fs::remove_all(out);
-  int stderr_pipe[2];
-  ASSERT_EQ(pipe(stderr_pipe), 0);
-  const pid_t child = fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    dup2(stderr_pipe[1], STDERR_FILENO);
-    close(stderr_pipe[0]);
-    close(stderr_pipe[1]);
-    std::signal(SIGINT, SIG_IGN);  // kept across exec, as a shell does for a background job
-    execl(binary.c_str(), binary.c_str(), "solve", "cornell", "--max-shots", "300", "--width", "16", "--height", "16",
-          "--out", out.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  close(stderr_pipe[1]);
-  FILE* child_stderr = fdopen(stderr_pipe[0], "r");
+  const auto [child, child_stderr] =
+      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, true);
+  ASSERT_GT(child, 0);
   ASSERT_NE(child_stderr, nullptr);
   std::string everything;
   char line[4096];
