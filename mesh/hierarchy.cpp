@@ -566,20 +566,31 @@ void Hierarchy::split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_
 // In a balanced mesh a leaf's coarser edge-neighbours are one level coarser, and splitting one of them makes no
 // new coarser neighbour for the leaf: the leaves split_coarser_neighbours splits are the coarser neighbours of the
 // leaf, theirs, and so on, as the mesh stands before it starts.
-NodeId Hierarchy::balance_blocker(NodeId node, Refusal& why) const {
-  std::vector<NodeId> pending{node}, neighbours;
+void Hierarchy::forced_splits(NodeId node, std::vector<NodeId>& out) const {
+  out.clear();
+  if (!impl_->options.balance) return;
+  std::vector<NodeId> neighbours;
   std::set<NodeId> seen{node};
+  std::vector<NodeId> pending{node};
   while (!pending.empty()) {
     const NodeId at = pending.back();
     pending.pop_back();
     edge_neighbours(at, neighbours);
     for (const NodeId nb : neighbours) {
       if (impl_->level[nb] >= impl_->level[at] || !seen.insert(nb).second) continue;
-      double smallest = 0.0;
-      why = refusal(nb, smallest);
-      if (why != Refusal::kNone) return nb;
+      out.push_back(nb);
       pending.push_back(nb);
     }
+  }
+}
+
+NodeId Hierarchy::balance_blocker(NodeId node, Refusal& why) const {
+  std::vector<NodeId> forced;
+  forced_splits(node, forced);
+  for (const NodeId nb : forced) {
+    double smallest = 0.0;
+    why = refusal(nb, smallest);
+    if (why != Refusal::kNone) return nb;
   }
   return kNoNode;
 }

@@ -133,6 +133,10 @@ class Hierarchy {
   SplitResult split(NodeId node);
   // Whether split(node) would be accepted (the same tests, without composing a reason).
   bool can_split(NodeId node) const;
+  // With balance: the leaves split(node) would split first so that edge-neighbours differ by at most one level (its
+  // coarser edge-neighbours, theirs, and so on), into `out`; empty without balance. Each must accept its split, or
+  // split(node) is refused.
+  void forced_splits(NodeId node, std::vector<NodeId>& out) const;
 
   // Leaves of the same surface that share a piece of an edge with leaf `node` (across hanging vertices too),
   // in the order of the leaf's face loop. O(number of vertices on the leaf's loop).
@@ -152,8 +156,7 @@ class Hierarchy {
   std::array<NodeId, 4> split_leaf(NodeId node);  // the split itself, no checks
   void require_leaf(NodeId node, const char* query) const;  // throws aarad::Error unless `node` is a leaf
   void split_coarser_neighbours(NodeId node, std::vector<NodeId>& also_split);
-  // With balance: the first leaf that split_coarser_neighbours(node) would split and that refuses a split (its
-  // refusal in `why`), or kNoNode.
+  // With balance: the first of forced_splits(node) that refuses a split (its refusal in `why`), or kNoNode.
   NodeId balance_blocker(NodeId node, Refusal& why) const;
 
   std::unique_ptr<Impl> impl_;

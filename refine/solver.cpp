@@ -795,11 +795,9 @@ std::vector<mesh::NodeId> Solver::split_candidates(std::span<const mesh::NodeId>
   return split_nodes;
 }
 
-// A split makes 3 leaves more for every leaf it splits: the candidate and, with balancing, its edge-neighbours of a
-// lower level, theirs in turn, and so on (Hierarchy::split_coarser_neighbours). In a balanced mesh a neighbour's
-// split makes no new coarser neighbour of a leaf it reaches (its pieces are at most one level below that leaf), so
-// these leaves, collected before the split, are all the split makes. Decided in the order of the splits, on one
-// thread: the same with any number of threads.
+// A split makes 3 leaves more for every leaf it splits: the candidate and, with balancing, the leaves it forces to
+// split first (Hierarchy::forced_splits). Decided in the order of the splits, on one thread: the same with any
+// number of threads.
 bool Solver::split_fits_element_limit(mesh::NodeId candidate) {
   const auto limit = static_cast<std::uint64_t>(options_.max_elements);
   const std::uint64_t leaves = hierarchy_.leaf_count();
@@ -807,21 +805,8 @@ bool Solver::split_fits_element_limit(mesh::NodeId candidate) {
   if (room < 3) return false;
   // Balancing splits distinct leaves, at most all of them: with 4 x leaves within the limit, no need to count.
   if (!hierarchy_.options().balance || room >= 3 * leaves) return true;
-  forced_mark_.resize(hierarchy_.node_count(), 0);
-  forced_.assign(1, candidate);
-  forced_mark_[candidate] = 1;
-  for (std::size_t k = 0; k < forced_.size() && 3 * forced_.size() <= room; ++k) {
-    const mesh::NodeId node = forced_[k];
-    const int level = hierarchy_.level(node);
-    hierarchy_.edge_neighbours(node, forced_around_);
-    for (const mesh::NodeId neighbour : forced_around_) {
-      if (forced_mark_[neighbour] != 0 || hierarchy_.level(neighbour) >= level) continue;
-      forced_mark_[neighbour] = 1;
-      forced_.push_back(neighbour);
-    }
-  }
-  for (const mesh::NodeId node : forced_) forced_mark_[node] = 0;
-  return 3 * forced_.size() <= room;
+  hierarchy_.forced_splits(candidate, forced_);
+  return 3 * (forced_.size() + 1) <= room;
 }
 
 // Most shots split nothing (in the office, 215 of the first 3 000), and writing every receiver's factor by node in

@@ -279,10 +279,8 @@ class Solver {
   // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
   // shot after shot: the refusal is asked once instead of recomputing the children's areas every time.
   std::vector<std::uint8_t> refused_;
-  // split_fits_element_limit's scratch: the leaves a split with balancing would split, a mark per NodeId (0 between
-  // calls), and edge-neighbours.
-  std::vector<mesh::NodeId> forced_, forced_around_;
-  std::vector<std::uint8_t> forced_mark_;
+  // split_fits_element_limit's scratch: the leaves a split with balancing would split first.
+  std::vector<mesh::NodeId> forced_;
   // The receivers that got flux from the current shot: the first touched_count_ entries (the vector only grows).
   std::vector<std::uint32_t> touched_;
   std::size_t touched_count_ = 0;
