@@ -29,6 +29,9 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint
   auto sample_y = [this, face](int row) { return geometry_.sample_y(face, row); };
   const std::span<const double> delta = geometry_.delta(face);
   unoccluded.clear();
+  // Below N = 4 the top face's quarter tasks have no columns (face_tasks): nothing to sample, and the row loop's
+  // &b.item[0] of an empty buffer was undefined behaviour (UBSan).
+  if (width == 0) return;
 
   // Receiver i clipped and projected (face pixel coordinates) into b.projected, with its box; 0 vertices when it is
   // degenerate or no sample x + 1/2 of the task's columns lies in [x_min, x_max).
