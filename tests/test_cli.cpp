@@ -655,7 +655,8 @@ TEST(Cli, FormfactorsFromAPlanarGroupWrittenWithSixDecimals) {
   const fs::path full = write_file("lamp_17.obj", scene("v %.17g %.17g %.17g\n"));
   const ProgramRun inspect = aarad("inspect " + rounded.string() + " --json");
   ASSERT_EQ(inspect.code, 0) << inspect.err;
-  for (const auto& group : nlohmann::json::parse(inspect.out)["groups"]) {
+  const nlohmann::json inspected = nlohmann::json::parse(inspect.out);
+  for (const auto& group : inspected["groups"]) {
     if (group["name"] == "lamp") {
       ASSERT_GT(group["surfaces"].size(), 1u) << "the rounding no longer splits it";
     }
