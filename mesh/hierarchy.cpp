@@ -675,8 +675,8 @@ SplitResult Hierarchy::split(NodeId node) {
   }
   if (m.options.balance) {
     // Balancing splits coarser neighbours first, and theirs in turn: each must take its split, or this one is
-    // refused. Split regardless, they went below min_area and past max_level, and at the last levels floating
-    // point holds into children of no area, turned clockwise (a reviewer's --balance solves).
+    // refused. Split regardless, they went below min_area, and at the deepest levels into children of no area,
+    // turned clockwise (a reviewer's --balance solves).
     Refusal why = Refusal::kNone;
     const NodeId blocker = balance_blocker(node, why);
     if (blocker != kNoNode) {
