@@ -575,13 +575,13 @@ Camera Scene::fitted_camera(double aspect) const {
   // +z, or a plane seen edge-on, came out black. Each direction is scored by the area of front faces it sees,
   // projected onto it; a closed room scores the same from every side (its vector areas sum to zero) and keeps the
   // convention, as does any scene the conventional view shows at least half as well as the best one.
-  const std::array<Vec3, 6> directions{Vec3(0.0, -0.2, 1.0), Vec3(0.0, -0.2, -1.0), Vec3(1.0, -0.2, 0.0),
-                                       Vec3(-1.0, -0.2, 0.0), Vec3(0.0, -1.0, 0.2), Vec3(0.0, 1.0, 0.2)};
+  std::array<Vec3, 6> directions{Vec3(0.0, -0.2, 1.0), Vec3(0.0, -0.2, -1.0), Vec3(1.0, -0.2, 0.0),
+                                 Vec3(-1.0, -0.2, 0.0), Vec3(0.0, -1.0, 0.2), Vec3(0.0, 1.0, 0.2)};
+  for (Vec3& d : directions) d = glm::normalize(d);
   std::array<double, 6> seen{};
   for (const Face& face : faces) {
     const Vec3 a = vector_area(face.vertices);  // area times the front normal
-    for (std::size_t k = 0; k < directions.size(); ++k)
-      seen[k] += std::max(0.0, -glm::dot(a, glm::normalize(directions[k])));
+    for (std::size_t k = 0; k < directions.size(); ++k) seen[k] += std::max(0.0, -glm::dot(a, directions[k]));
   }
   std::size_t best = 0;
   for (std::size_t k = 1; k < directions.size(); ++k)
@@ -593,7 +593,7 @@ Camera Scene::fitted_camera(double aspect) const {
   // No floor in absolute units: a scene 1e-12 across was framed as if it were 1e-9 across, a dot.
   const double diagonal_length = diagonal();
   const double radius = diagonal_length > 0.0 ? 0.5 * diagonal_length : 1.0;
-  camera.forward = glm::normalize(directions[best]);
+  camera.forward = directions[best];
   camera.up = glm::normalize(Vec3(0.0, 1.0, 0.0) - camera.forward.y * camera.forward);
   const double half_vertical = 0.5 * camera.vertical_fov;
   const double half_horizontal = std::atan(std::max(aspect, 1e-6) * std::tan(half_vertical));

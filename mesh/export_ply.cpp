@@ -46,9 +46,13 @@ bool beyond_float(double value) {
 }  // namespace
 
 void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const VertexColour& vertex_colour,
-               const std::filesystem::path& path, std::span<const Rgb> display_values) {
+               const std::filesystem::path& path) {
+  write_ply(hierarchy, node_values, build_display_mesh(hierarchy, node_values), vertex_colour, path);
+}
+
+void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const DisplayMesh& display,
+               const VertexColour& vertex_colour, const std::filesystem::path& path) {
   const Hierarchy::Impl& m = hierarchy.impl();
-  const DisplayMesh display = build_display_mesh(hierarchy, display_values.empty() ? node_values : display_values);
   const std::vector<NodeId> leaves = hierarchy.leaves();
 
   std::vector<std::vector<std::uint32_t>> loops(leaves.size());

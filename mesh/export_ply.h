@@ -2,6 +2,7 @@
 // radiosity_r, radiosity_g, radiosity_b, level, patch (the output contract of ../shared/design.md).
 #pragma once
 
+#include "mesh/display.h"
 #include "mesh/hierarchy.h"
 
 #include <array>
@@ -17,11 +18,14 @@ namespace aarad::mesh {
 using VertexColour = std::function<std::array<std::uint8_t, 3>(const Rgb&)>;
 
 // node_values is indexed by NodeId (only leaves read): the per-face radiosity. Vertex colours are the
-// display reconstruction of display_values (the same indexing; node_values when empty) through `vertex_colour`:
-// `aarad solve` writes the solution B per face and colours its vertices as smooth.png shows them, with the
-// display-only ambient term. Written through write_file_atomically (core/atomic_file.h), so `path` is whole or
-// untouched; throws aarad::Error naming the path on failure.
+// display reconstruction of those values through `vertex_colour`. Written through write_file_atomically
+// (core/atomic_file.h), so `path` is whole or untouched; throws aarad::Error naming the path on failure.
 void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const VertexColour& vertex_colour,
-               const std::filesystem::path& path, std::span<const Rgb> display_values = {});
+               const std::filesystem::path& path);
+// The same with the vertex colours from `display` (build_display_mesh of this hierarchy, from any values):
+// `aarad solve` writes the solution B per face and colours the vertices as smooth.png shows them, from the display
+// mesh of the displayed values (with the ambient term) that its images are rendered from.
+void write_ply(const Hierarchy& hierarchy, std::span<const Rgb> node_values, const DisplayMesh& display,
+               const VertexColour& vertex_colour, const std::filesystem::path& path);
 
 }  // namespace aarad::mesh

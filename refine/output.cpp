@@ -100,17 +100,17 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   result.tone_map = solution_tone_map(solver, displayed);
   const ToneMap map = result.tone_map;
 
-  // The PLY carries the solution B per face (no ambient term); its vertex colours are the displayed values through
-  // the images' tone map, as smooth.png shows them.
+  // One display mesh of the displayed values for every file. The PLY carries the solution B per face (no ambient
+  // term); its vertex colours are the displayed values through the images' tone map, as smooth.png shows them.
+  const mesh::DisplayMesh display = mesh::build_display_mesh(hierarchy, displayed);
   const fs::path ply = directory / "mesh.ply";
-  mesh::write_ply(hierarchy, radiosity, [map](const Rgb& value) { return map(value); }, ply, displayed);
+  mesh::write_ply(hierarchy, radiosity, display, [map](const Rgb& value) { return map(value); }, ply);
   result.files.push_back(ply);
 
   const Scene& scene = solver.scene();
   const double aspect = static_cast<double>(options.width) / options.height;
   const Camera camera = scene.camera ? *scene.camera : scene.fitted_camera(aspect);
   if (!next_file()) return result;
-  const mesh::DisplayMesh display = mesh::build_display_mesh(hierarchy, displayed);
 
   // The images are rendered scaled by a power of two near the exposure (render.h), so that single precision keeps
   // what the tone map shows: with Ke 1e45 or 1e-300 the values as they are were inf or 0, and flat.png and
