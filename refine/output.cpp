@@ -8,9 +8,11 @@
 #include "refine/render.h"
 #include "refine/report.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -76,24 +78,12 @@ void check_output_directory(const std::filesystem::path& directory) {
   }
 }
 
-OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,
-                                  const OutputOptions& options) {
-  namespace fs = std::filesystem;
-  const auto start = std::chrono::steady_clock::now();
-  if (options.width < 1 || options.height < 1) throw Error("image size must be at least 1 x 1");
-  OutputResult result;
-  // Before each file: false when the caller asks to stop, and then the result says how far it got.
-  const auto next_file = [&] {
-    if (!options.keep_writing || options.keep_writing()) return true;
-    result.complete = false;
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return false;
-  };
-  if (!next_file()) return result;
-  std::error_code error;
-  fs::create_directories(directory, error);
-  if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
+namespace {
 
+// The five files of write_solution_files, in order, each after asking next_file; result.files lists those written.
+void write_files(const Solver& solver, const std::filesystem::path& directory, const OutputOptions& options,
+                 const std::function<bool()>& next_file, OutputResult& result) {
+  namespace fs = std::filesystem;
   const mesh::Hierarchy& hierarchy = solver.hierarchy();
   const std::vector<Rgb> radiosity = solver.radiosity();
   const std::vector<Rgb> displayed = solver.displayed_radiosity();
@@ -110,7 +100,7 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   const Scene& scene = solver.scene();
   const double aspect = static_cast<double>(options.width) / options.height;
   const Camera camera = scene.camera ? *scene.camera : scene.fitted_camera(aspect);
-  if (!next_file()) return result;
+  if (!next_file()) return;
 
   // The images are rendered scaled by a power of two near the exposure (render.h), so that single precision keeps
   // what the tone map shows: with Ke 1e45 or 1e-300 the values as they are were inf or 0, and flat.png and
@@ -123,24 +113,65 @@ OutputResult write_solution_files(const Solver& solver, const std::filesystem::p
   write_png(flat_display, directory / "flat.png");
   result.files.push_back(directory / "flat.png");
 
-  if (!next_file()) return result;
+  if (!next_file()) return;
   const Rendering smooth =
       render(display, displayed, camera, options.width, options.height, Shading::kSmooth, scale);
   write_png(tone_map(smooth.image, scaled_map), directory / "smooth.png");
   result.files.push_back(directory / "smooth.png");
 
-  if (!next_file()) return result;
+  if (!next_file()) return;
   Image8 with_edges = flat_display;
   draw_leaf_edges(with_edges, flat.leaf);
   write_png(with_edges, directory / "mesh.png");
   result.files.push_back(directory / "mesh.png");
 
-  if (!next_file()) return result;
+  if (!next_file()) return;
   Image linear = flat.image;  // radiosity as it is: inf beyond single precision (aarad warns), 0 below it
   for (float& value : linear.pixels) value = static_cast<float>(static_cast<double>(value) / scale);
   write_exr(linear, directory / "radiosity.exr");
   result.files.push_back(directory / "radiosity.exr");
+}
 
+}  // namespace
+
+OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,
+                                  const OutputOptions& options) {
+  namespace fs = std::filesystem;
+  const auto start = std::chrono::steady_clock::now();
+  if (options.width < 1 || options.height < 1) throw Error("image size must be at least 1 x 1");
+  OutputResult result;
+  // Before each file: false when the caller asks to stop, and then the result says how far it got.
+  const auto next_file = [&] {
+    if (!options.keep_writing || options.keep_writing()) return true;
+    result.complete = false;
+    return false;
+  };
+  if (!next_file()) return result;
+  std::error_code error;
+  fs::create_directories(directory, error);
+  if (error) throw Error("cannot create directory " + directory.string() + ": " + error.message());
+
+  // report.json marks a whole set of files: write_report writes it last. An earlier solve's report goes before
+  // this solve writes its first file, and when the writing stops early (a failure, or keep_writing), the earlier
+  // solve's files that this one did not write again go too: the directory never mixes the files of two solves.
+  const auto remove_earlier_files = [&] {
+    for (const std::string_view name : kSolutionFileNames) {
+      const fs::path path = directory / name;
+      if (std::find(result.files.begin(), result.files.end(), path) != result.files.end()) continue;
+      std::error_code ignored;
+      const fs::file_status status = fs::symlink_status(path, ignored);
+      if (fs::is_regular_file(status) || fs::is_symlink(status)) fs::remove(path, ignored);
+    }
+  };
+  fs::remove(directory / "report.json", error);
+  if (error) throw Error("cannot remove " + (directory / "report.json").string() + ": " + error.message());
+  try {
+    write_files(solver, directory, options, next_file, result);
+  } catch (...) {
+    remove_earlier_files();
+    throw;
+  }
+  if (!result.complete) remove_earlier_files();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

@@ -49,7 +49,10 @@ void check_output_directory(const std::filesystem::path& directory);
 
 // Writes mesh.ply, flat.png, smooth.png, mesh.png and radiosity.exr into `directory` (created when missing),
 // from the scene's camera or, without one, Scene::fitted_camera, in that order, each after asking
-// options.keep_writing. Throws aarad::Error naming the file on failure.
+// options.keep_writing. Throws aarad::Error naming the file on failure. report.json marks a whole set (write it
+// with write_report after this): an earlier solve's report.json in `directory` is removed before the first file is
+// written, and when the writing stops early (a failure, or keep_writing), so are the earlier solve's files of
+// kSolutionFileNames that were not written again, so that the directory never mixes the files of two solves.
 OutputResult write_solution_files(const Solver& solver, const std::filesystem::path& directory,
                                   const OutputOptions& options = {});
 

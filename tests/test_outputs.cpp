@@ -149,6 +149,46 @@ TEST_F(OutputsTest, KeepWritingStopsBetweenFiles) {
   fs::remove_all(directory);
 }
 
+// Files of an earlier solve in the folder: report.json goes before the first new file is written, and when the
+// writing stops early, stopped or failing, the earlier files not written again go too. Before, the folder kept the
+// earlier report.json and images next to the new mesh.ply: a set that described two solves.
+TEST_F(OutputsTest, WritingThatStopsEarlyLeavesNoFileOfAnEarlierSolve) {
+  const fs::path directory = directory_.parent_path() / (directory_.filename().string() + "-earlier");
+  const auto names = [&] {
+    std::set<std::string> found;
+    for (const auto& entry : fs::directory_iterator(directory)) found.insert(entry.path().filename().string());
+    return found;
+  };
+  const auto write_earlier_solve = [&] {
+    fs::remove_all(directory);
+    fs::create_directories(directory);
+    for (const std::string_view name : kSolutionFileNames) std::ofstream(directory / name) << "earlier solve";
+  };
+
+  write_earlier_solve();
+  int asked = 0;
+  EXPECT_FALSE(write_solution_files(*solver_, directory, {.width = 16, .height = 12,
+                                                          .keep_writing = [&] { return ++asked <= 2; }})
+                   .complete);
+  EXPECT_EQ(names(), (std::set<std::string>{"mesh.ply", "flat.png"}));
+  EXPECT_EQ(read_image(directory / "flat.png").width, 16);
+
+  // smooth.png cannot be renamed over a directory: the write fails there. The directory stays.
+  write_earlier_solve();
+  fs::remove(directory / "smooth.png");
+  fs::create_directory(directory / "smooth.png");
+  EXPECT_THROW(write_solution_files(*solver_, directory, {.width = 16, .height = 12}), Error);
+  EXPECT_EQ(names(), (std::set<std::string>{"mesh.ply", "flat.png", "smooth.png"}));
+  EXPECT_TRUE(fs::is_directory(directory / "smooth.png"));
+  EXPECT_EQ(read_image(directory / "flat.png").width, 16);
+
+  // A whole set replaces the earlier one; only write_report brings report.json back.
+  write_earlier_solve();
+  EXPECT_TRUE(write_solution_files(*solver_, directory, {.width = 16, .height = 12}).complete);
+  EXPECT_EQ(names(), (std::set<std::string>{"mesh.ply", "flat.png", "smooth.png", "mesh.png", "radiosity.exr"}));
+  fs::remove_all(directory);
+}
+
 TEST_F(OutputsTest, PngsReadBackWithTheRequestedSize) {
   for (const char* name : {"flat.png", "smooth.png", "mesh.png"}) {
     const ReadImage image = read_image(directory_ / name);
