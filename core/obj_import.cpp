@@ -349,7 +349,20 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
                                                             "understood; write 's N' with a whole number N below "
                                                             "1e9, or 's off'"));
     } else if (key == "mtllib") {
-      for (std::size_t i = 1; i < t.size(); ++i) text.material_libraries.emplace_back(number, t[i]);
+      // The specification separates libraries by blanks, but Blender's exporter (2.79; tinyobjloader issue 355)
+      // writes a file name with spaces as it is, "mtllib my scene.mtl": when the words are not all files in the
+      // OBJ's folder and the rest of the line is one, the line names that file.
+      const fs::path folder = fs::path(path).parent_path();
+      const auto is_file = [&folder](const std::string& name) {
+        std::error_code error;
+        return fs::is_regular_file(folder / name, error);
+      };
+      const std::string rest = trim(line.substr(line.find("mtllib") + 6));
+      if (t.size() > 2 && !std::all_of(t.begin() + 1, t.end(), is_file) && is_file(rest)) {
+        text.material_libraries.emplace_back(number, rest);
+      } else {
+        for (std::size_t i = 1; i < t.size(); ++i) text.material_libraries.emplace_back(number, t[i]);
+      }
     } else if (key == "usemtl") {
       text.material_uses.emplace_back(number, t.size() > 1 ? t[1] : std::string());
       if (t.size() > 2)
@@ -584,7 +597,13 @@ Scene import_obj(const std::string& obj_path) {
     const fs::path mtl = folder / file;
     if (std::find(libraries_read.begin(), libraries_read.end(), mtl) != libraries_read.end()) continue;
     libraries_read.push_back(mtl);
-    library_statements += "mtllib " + file + "\n";
+    // tinyobjloader splits the line at spaces, a backslash keeping the character after it.
+    library_statements += "mtllib ";
+    for (const char c : file) {
+      if (c == ' ' || c == '\\') library_statements += '\\';
+      library_statements += c;
+    }
+    library_statements += '\n';
     errno = 0;
     const bool regular = fs::is_regular_file(mtl, ec);
     const bool readable = regular && std::ifstream(mtl);

@@ -177,6 +177,27 @@ TEST_F(SceneImport, import_materials_are_found_in_every_library_whatever_the_ord
   }
 }
 
+// Blender (2.79's exporter, and others: tinyobjloader issue 355) names a library whose file name has spaces without
+// escaping them, "mtllib my scene.mtl" for my scene.obj. Its words name no file, and the library was not read: the
+// lamp got the default material, nothing emitted, and `aarad solve` refused the scene. The line names the one file
+// its rest names, when that file is there and its words are not all files; a line of several libraries stays one.
+TEST_F(SceneImport, import_library_name_with_spaces_as_blender_writes_it) {
+  write("my scene.mtl", "newmtl lamp\nKd 0.2 0.2 0.2\nKe 4 4 4\n");
+  const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\ng light\nusemtl lamp\nf 1 2 3 4\n";
+  const Scene scene = import_obj(write("my scene.obj", "mtllib my scene.mtl\n" + quad));
+  EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+  ASSERT_EQ(scene.surfaces.size(), 1u);
+  EXPECT_EQ(scene.materials[scene.surfaces[0].material].emission, Rgb(4.0));
+  // Two libraries whose names have no spaces are still two, and a name with spaces that is not there is not found.
+  write("my.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+  write("scene.mtl", "newmtl lamp\nKd 0.2 0.2 0.2\nKe 2 2 2\n");
+  const Scene two = import_obj(write("two.obj", "mtllib my.mtl scene.mtl\n" + quad));
+  EXPECT_TRUE(two.warnings.empty()) << two.warnings.front();
+  EXPECT_EQ(two.materials[two.surfaces[0].material].emission, Rgb(2.0));
+  const Scene missing = import_obj(write("missing.obj", "mtllib other scene.mtl\n" + quad));
+  EXPECT_TRUE(has_warning(missing, "material library '" + (dir_ / "other").string() + "' not found"));
+}
+
 TEST_F(SceneImport, import_obj_without_materials_uses_default_with_warning) {
   const std::string obj = write("plain.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
   const Scene scene = import_obj(obj);
