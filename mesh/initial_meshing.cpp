@@ -84,11 +84,18 @@ struct Budget {
 
   void check(double count, const char* items, const char* option, double size) const {
     if (count <= remaining) return;
+    // A size of 1e-300 squares to 0 and the count to inf, which is no number to show.
+    char counted[64];
+    if (std::isfinite(count)) {
+      std::snprintf(counted, sizeof counted, "%.3g", count);
+    } else {
+      std::snprintf(counted, sizeof counted, "more than %.3g", std::numeric_limits<double>::max());
+    }
     char text[400];
     std::snprintf(text, sizeof text,
-                  "meshing: with %s %g the surface of group '%s' makes %.3g initial %s, and the scene more than "
+                  "meshing: with %s %g the surface of group '%s' makes %s initial %s, and the scene more than "
                   "the limit of %.3g (MeshingOptions::max_initial_elements); choose a larger %s",
-                  option, size, scene.groups[surface.group].name.c_str(), count, items, limit, option);
+                  option, size, scene.groups[surface.group].name.c_str(), counted, items, limit, option);
     throw Error(text);
   }
 };

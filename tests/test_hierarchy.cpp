@@ -92,6 +92,9 @@ TEST(Hierarchy, SizesThatWouldExhaustMemoryOrAreNotFiniteAreRefused) {
       << message(square, o);
   o = sizes(1e-9, 1e-9);  // counts far beyond an int
   EXPECT_NE(message(square, o).find("with patch size 1e-09"), std::string::npos) << message(square, o);
+  o = sizes(1e-300, 1e-300);  // a count beyond the doubles: said in words, not "makes inf initial patches"
+  EXPECT_NE(message(square, o).find("makes more than 1.8e+308 initial patches"), std::string::npos)
+      << message(square, o);
   o = sizes(0.5, 1.0 / 1500);  // 2.25e6 elements: over the default limit, allowed under a larger one
   EXPECT_NE(message(square, o).find("2.25e+06 initial elements"), std::string::npos) << message(square, o);
   o.max_initial_elements = 3e6;
