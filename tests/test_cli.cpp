@@ -473,6 +473,15 @@ TEST(Cli, APatchSizeOnTheCommandLineReplacesTheScenesSizes) {
   EXPECT_LT(options["patch_size"].get<double>(), 140.0);  // d / 8
 }
 
+// The summary names the folder as given, without doubling its trailing separator ("wrote o//:" before).
+TEST(Cli, TheSummaryNamesAnOutputFolderGivenWithATrailingSeparatorOnce) {
+  const std::string dir = (work_dir() / "trailing").string();
+  const ProgramRun r = aarad("solve cornell --max-shots 1 --out " + dir + "//");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("aarad: wrote " + dir + "/: mesh.ply"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(fs::path(dir) / "report.json"));
+}
+
 TEST(Cli, TheObjCopyOfTheCornellBoxSolvesAsTheBuiltIn) {
   const fs::path dir = work_dir();
   const std::string obj = std::string(AARAD_SOURCE_DIR) + "/data/scenes/cornell.obj";

@@ -174,7 +174,9 @@ void run_solve(SolveCommandOptions options) {
   if (options.min_area) solver_options.meshing.min_area = *options.min_area;
   if (options.max_level) solver_options.meshing.max_level = *options.max_level;
   solver_options.meshing.balance = options.balance;
-  const std::filesystem::path out = options.out.empty() ? default_out_directory(scene) : options.out;
+  std::filesystem::path out = options.out.empty() ? default_out_directory(scene) : options.out;
+  // Without its trailing separators, so that the notes' "wrote DIR/" does not read "o//" for `--out o/`.
+  while (!out.has_filename() && out.has_relative_path()) out = out.parent_path();
   refine::check_output_directory(out);  // now, not after the solve
 
   refine::Solver solver(scene, solver_options);
