@@ -102,6 +102,14 @@ std::string clean_text(std::istream& in) {
       line.erase(first + 1, 1);
       key_end = key_end == std::string::npos ? key_end : key_end - 1;
     }
+    // A material's name starts after the blanks that follow `newmtl`, however many: tinyobjloader took all but the
+    // first of them into the name ("newmtl  lamp" defined " lamp"), which no `usemtl` finds, and the material's
+    // faces got the default one, emission lost, without a word (read_mtl_text trims the name and found it defined).
+    if (first != std::string::npos && key_end != std::string::npos &&
+        line.compare(first, key_end - first, "newmtl") == 0) {
+      const auto name = line.find_first_not_of(" \t", key_end);
+      if (name != std::string::npos) line.replace(key_end, name - key_end, " ");
+    }
     if (first != std::string::npos && kCommentAfter.contains(line.substr(first, key_end - first))) {
       for (std::size_t i = first + 1; i < line.size(); ++i) {
         if (line[i] == '#' && (line[i - 1] == ' ' || line[i - 1] == '\t')) {

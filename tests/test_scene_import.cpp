@@ -215,6 +215,22 @@ TEST_F(SceneImport, import_material_without_kd_warns_and_uses_grey) {
   EXPECT_TRUE(has_warning(scene, "m.mtl:1: material 'bare' has no Kd"));
 }
 
+// A name after more than one blank ("newmtl  lamp", "newmtl \tlamp") is the name without them. tinyobjloader kept
+// all blanks but one in it: `usemtl lamp` found no such material, and the lamp's face got the default one, its Ke
+// lost and the scene black, with only "material ' lamp' has no Kd" said.
+TEST_F(SceneImport, import_material_names_after_several_blanks_are_found) {
+  write("m.mtl", "newmtl  grey\nKd 0.5 0.5 0.5\nnewmtl \tlamp\nKd 0.2 0.2 0.2\nKe 4 4 4\n");
+  const std::string obj = write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\n"
+                                         "usemtl grey\nf 1 2 3\nusemtl lamp\nf 4 6 5\n");
+  const Scene scene = import_obj(obj);
+  EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+  ASSERT_EQ(scene.faces.size(), 2u);
+  EXPECT_EQ(scene.materials[scene.faces[0].material].name, "grey");
+  EXPECT_EQ(scene.materials[scene.faces[1].material].name, "lamp");
+  EXPECT_EQ(scene.materials[scene.faces[1].material].reflectance, Rgb(0.2));
+  EXPECT_EQ(scene.materials[scene.faces[1].material].emission, Rgb(4.0));
+}
+
 // ---- Errors with lines ---------------------------------------------------------------------------------
 
 TEST_F(SceneImport, import_nan_coordinate_is_error_with_line) {
