@@ -446,8 +446,20 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     const CornerIndices patch{index_of(f->vertex(0)), index_of(f->vertex(1)), index_of(f->vertex(2)), -1};
     out.patches.push_back(patch);
   }
-  if (out.patches.empty())
-    throw Error("initial meshing: surface of group '" + scene.groups[surface.group].name + "' has no area to mesh");
+  // Faces narrower everywhere than `weld` (slivers of a scene's tessellation) collapse onto their own edges when
+  // their vertices are welded and T-junctions split; where a surface is only such faces, nothing is left. The import
+  // passes them (their size is not below kSmallestFace), so the error names the file and line of one, not only the
+  // group: it was "initial meshing: surface of group 's' has no area to mesh", where `aarad inspect` saw no problem.
+  if (out.patches.empty()) {
+    const Face& face = scene.faces[surface.faces.front()];
+    char width[32];
+    std::snprintf(width, sizeof width, "%g", weld);
+    throw InputError(scene.name.empty() ? std::string("scene") : scene.name, face.source_line,
+                     "the faces of one surface of group '" + scene.groups[surface.group].name + "' (this one and " +
+                         std::to_string(surface.faces.size() - 1) + " more in its plane) are all narrower than " +
+                         width + " (1e-6 of the scene's diagonal), which the meshing takes for rounding errors: "
+                         "nothing is left to mesh. Make them wider or remove them");
+  }
   budget.check(static_cast<double>(out.patches.size()), "patches", "patch size", patch_size);
   divide_triangle_patches(out, element_size, budget);
   return out;

@@ -306,6 +306,30 @@ TEST(Hierarchy, TJunctionsAndVerticesARoundingErrorApartAreJoined) {
   }
 }
 
+// A surface of slivers narrower than 1e-6 of the scene's diagonal (here 1e-7 in a scene 1.4 across) collapses when
+// the meshing joins a vertex to an edge that close: nothing is left of it. The scene passes validate() (the faces
+// are 0.5 long), so the error names the file and a face's line; it was an Error naming only the group.
+TEST(Hierarchy, ASurfaceOfSliversTooNarrowToMeshIsAnErrorWithALine) {
+  Scene scene;
+  scene.name = "slivers.obj";
+  const std::uint32_t material = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  scene.add_face(scene.add_group("floor"), material, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, 7);
+  const std::uint32_t strips = scene.add_group("strips");
+  scene.add_face(strips, material, {{0, 0.2, 0}, {0.5, 0.2, 0}, {0.25, 0.2 + 1e-7, 0}}, 12);
+  scene.add_face(strips, material, {{0, 0.6, 0}, {0.5, 0.6, 0}, {0.25, 0.6 + 1e-7, 0}}, 13);
+  scene.build_surfaces();
+  scene.validate();
+  try {
+    const Hierarchy h(scene, sizes(0.5, 0.25));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "slivers.obj");
+    EXPECT_EQ(e.line(), 12);
+    EXPECT_NE(e.message().find("group 'strips'"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("narrower than"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Hierarchy, PatchNotCutFurtherStillHasOneElementChild) {
   const Hierarchy h(test::square_scene(), sizes(1.0, 1.0));
   ASSERT_EQ(h.patches().size(), 1u);
