@@ -273,7 +273,7 @@ Scene make_cornell_box() {
 
   // Focal length 0.035 and film 0.025 x 0.025: vertical field 2 atan(0.0125 / 0.035).
   scene.camera = Camera{Vec3(278, 273, -800), Vec3(0, 0, 1), Vec3(0, 1, 0), 2.0 * std::atan(0.0125 / 0.035)};
-  // Millimetres: 376 patches and 1 504 initial elements, which keep the AA hemicube's solve short.
+  // Millimetres: 260 patches and 1 040 initial elements, which keep the AA hemicube's solve short.
   scene.meshing = MeshingHint{140.0, 70.0, 60.0};
   return finished(std::move(scene));
 }

@@ -383,10 +383,25 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     polygons.push_back(std::move(polygon));
   }
   std::sort(vertices.begin(), vertices.end(), [](const Vec2& p, const Vec2& q) { return p.x < q.x; });
-  // Every face edge is a constraint, split at the other faces' vertices that lie within `weld` of it but not on it
-  // (a T-junction written a rounding error off the edge, as exporters do). Left as they are, the sliver between the
-  // edge and the vertex is a gap in the surface, which the mesher either refines down to the rounding error (a
-  // crash) or leaves as a hole. Split, both faces share the edge's pieces.
+  // The outline of the union of the faces is the constraint: its own edges, not the faces'. An edge two faces share
+  // (once each way) is no feature of the surface, only of how the file cut it: kept, the mesher refined around it,
+  // and a CAD fan of thin triangles (a plate with a round hole, fanned from its corners) made 70 469 patches of 36
+  // triangles, the one polygon 182; the Cornell floor, cut into slabs around the blocks, had 207 patches to the
+  // ceiling's 16. So every face edge is split at the vertices of the surface that lie on it or within `weld` of it
+  // (a T-junction, perhaps written a rounding error off the edge, as exporters do; left as it was, the sliver
+  // between the edge and the vertex was a gap, which the mesher refined down to the rounding error, a crash, or
+  // left as a hole), and the pieces two faces share, once each way, cancel; the rest are constraints.
+  using Point = std::pair<double, double>;
+  const auto point = [](const Vec2& p) { return Point{p.x, p.y}; };
+  std::map<std::pair<Point, Point>, int> pieces;  // directed pieces of face edges not (yet) cancelled, with counts
+  const auto add_piece = [&](const Vec2& from, const Vec2& to) {
+    const auto reverse = pieces.find({point(to), point(from)});
+    if (reverse != pieces.end() && reverse->second > 0) {
+      --reverse->second;
+    } else {
+      ++pieces[{point(from), point(to)}];
+    }
+  };
   std::vector<std::pair<double, Vec2>> cuts;  // along an edge: parameter, point
   for (const std::vector<Vec2>& polygon : polygons) {
     for (std::size_t i = 0; i < polygon.size(); ++i) {
@@ -408,18 +423,21 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
         const double t = glm::dot(v - a, d) / length2;
         if (!(t > 0.0 && t < 1.0)) continue;
         const Vec2 off = v - (a + t * d);
-        // A vertex exactly on the edge splits the constraint in the triangulation itself.
-        if (glm::dot(off, off) <= weld * weld && orientation(a, b, v) != Sign::kZero) cuts.emplace_back(t, v);
+        if (glm::dot(off, off) <= weld * weld || orientation(a, b, v) == Sign::kZero) cuts.emplace_back(t, v);
       }
       std::sort(cuts.begin(), cuts.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
       Vec2 from = a;
       for (const auto& [t, v] : cuts) {
         if (v == from) continue;  // a vertex of several faces
-        cdt.insert_constraint(Point2(from.x, from.y), Point2(v.x, v.y));
+        add_piece(from, v);
         from = v;
       }
-      cdt.insert_constraint(Point2(from.x, from.y), Point2(b.x, b.y));
+      add_piece(from, b);
     }
+  }
+  for (const auto& [ends, count] : pieces) {
+    if (count == 0) continue;
+    cdt.insert_constraint(Point2(ends.first.first, ends.first.second), Point2(ends.second.first, ends.second.second));
   }
   std::vector<Point2> seeds;  // one point in every region outside the surface (holes), which is not meshed
   std::vector<Point2> centres;

@@ -66,7 +66,7 @@ struct SolverOptions {
   // Patch and element sizes, max level, min area, balance. The default is the hierarchy's (zeros: sizes relative
   // to the scene's diagonal), not what `aarad solve` uses for a scene that names its sizes (the built-in Cornell
   // box and office, an OBJ file with "# aarad meshing:"): set it to default_meshing(scene) to solve as the program
-  // does (on the Cornell box 1 504 initial elements and 1 588 leaves at the end, against 1 728 and 3 756).
+  // does (on the Cornell box 1 040 initial elements and 1 133 leaves at the end, against 1 332 and 3 171).
   mesh::MeshingOptions meshing;
 };
 
