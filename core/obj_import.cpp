@@ -331,7 +331,8 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       for (std::size_t i = 1; i < t.size(); ++i) {
         if (!vertex_reference(t[i]))
           throw InputError(path, number, "face vertex '" + t[i] + "' is not a vertex reference; write v, v/vt, "
-                                         "v//vn or v/vt/vn with whole numbers (negative ones count from the end)");
+                                         "v//vn or v/vt/vn with whole numbers other than 0 (indices count from 1, "
+                                         "negative ones from the end)");
         // tinyobjloader reads indices as int: a larger one would wrap around to some other vertex.
         errno = 0;
         const long long index = std::strtoll(t[i].c_str(), nullptr, 10);

@@ -274,6 +274,9 @@ TEST_F(SceneImport, import_face_with_a_token_that_is_not_a_vertex_reference_is_e
     EXPECT_EQ(e.line(), 6) << face;
     EXPECT_NE(e.message().find("not a vertex reference"), std::string::npos) << face << ": " << e.message();
   }
+  // Index 0 is a whole number: the message says why it is refused ("with whole numbers" alone did not).
+  EXPECT_NE(import_error(write("zero.obj", vertices + "f 0 1 2\n")).message().find("indices count from 1"),
+            std::string::npos);
   // Every form OBJ allows: v, v/vt, v//vn, v/vt/vn, negative (relative) indices.
   const std::string ok = vertices + "vt 0 0\nvn 0 0 1\nf 1 2/1 3//1 -1/1/1\n";
   EXPECT_EQ(import_obj(write("forms.obj", ok)).faces.size(), 1u);
