@@ -12,7 +12,8 @@
 namespace aarad::refine {
 namespace {
 
-// A receiver is corrected when its radius is at most this times the shooting patch's.
+// A receiver is corrected when its radius is at most this times the shooting patch's size: its radius, or its width
+// when that is smaller (patch_size).
 constexpr double kSmaller = 0.75;
 // The far receivers of a shot are scaled by at most this factor (or its inverse) to keep the shot's total.
 constexpr double kFarChange = 1.25;
@@ -52,6 +53,27 @@ void clip_to_front_of(std::span<const Vec3> polygon, const Vec3& origin, const V
     const Vec3& q = clipped[v];
     out.push_back(frame.centre + q.x * frame.tangent + q.y * frame.bitangent + q.z * frame.normal);
   }
+}
+
+// The size a receiver must be clearly below for its centroid to stand for it: the patch's radius, or its width (the
+// smallest extent across it, for a convex polygon the least over its edges of the largest distance of a corner from
+// the edge's line) when that is smaller. A receiver next to a sliver of width w sees the sliver's factor vary over a
+// distance of about w, not over the sliver's radius: from the centroids of wall elements 20 times the width of a lamp
+// strip 0.003 wide along their foot, the strip's factor was far below its mean over them, and the wall got half the
+// strip's light (test NearField.ReceiversNextToASliverAreSmallerThanItsWidth). Squares, rectangles up to sides 1 : 1.7
+// and equilateral triangles are wider than their radius.
+double patch_size(std::span<const Vec3> polygon, double radius) {
+  double width = radius;
+  for (std::size_t v = 0; v < polygon.size(); ++v) {
+    const Vec3 edge = polygon[(v + 1) % polygon.size()] - polygon[v];
+    const double length = glm::length(edge);
+    if (!(length > 0.0)) continue;
+    double farthest = 0.0;
+    for (const Vec3& corner : polygon)
+      farthest = std::max(farthest, glm::length(glm::cross(edge, corner - polygon[v])) / length);
+    width = std::min(width, farthest);
+  }
+  return width;
 }
 
 }  // namespace
@@ -140,6 +162,7 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
   const double radius = mark_near_patches(shooter);
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
+  const double size = patch_size(shooter.polygon, radius);
 
   // The receivers to look at, in order: the subset, or the receivers of near patches that candidates() listed for
   // this shooter and view, or every receiver.
@@ -157,11 +180,11 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
     const Vec3 centroid = aarad::centroid(polygon);
     const Vec3 d = centroid - shooter.centroid;
     if (!(glm::dot(d, d) < near_squared) || !(area > 0.0)) continue;
-    // Only receivers clearly smaller than the patch: for them the centroid stands for the whole better than the
-    // patch's centroid stands for the patch.
+    // Only receivers clearly smaller than the patch, and than its width: for them the centroid stands for the whole
+    // better than the patch's centroid stands for the patch.
     double receiver_radius = 0.0;
     for (const Vec3& corner : polygon) receiver_radius = std::max(receiver_radius, glm::length(corner - centroid));
-    if (!(receiver_radius <= kSmaller * radius)) continue;
+    if (!(receiver_radius <= kSmaller * size)) continue;
     // What the back end saw of the receiver: its factor over the factor it would have had with nothing in front.
     double unoccluded = 0.0;
     if (!shooter.unoccluded.empty()) {

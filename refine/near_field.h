@@ -16,7 +16,8 @@
 // centroid stands for the receiver better than the patch's centroid stands for the patch when the receiver is the
 // smaller of the two, even where they touch. So a receiver e whose centroid lies within `reach` times the patch's
 // radius (its farthest corner from its centroid) of the patch's centroid, and whose own radius is at most 3/4 of
-// the patch's, gets
+// the patch's radius and of its width (the least extent across it: next to a sliver the factor varies over the
+// sliver's width), gets
 //     G_e = v_e F(dA_e -> A_s) A_e / A_s
 // (for a receiver crossing the patch's plane, A_e and the point of dA_e are the area and centroid of its part in
 // front of the patch: its own centroid may lie behind the patch, or just in front at the junction), where v_e,
