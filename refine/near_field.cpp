@@ -13,7 +13,7 @@ namespace aarad::refine {
 namespace {
 
 // A receiver is corrected when its radius is at most this times the shooting patch's size: its radius, or its width
-// when that is smaller (patch_size).
+// when that is smaller (patch_extent).
 constexpr double kSmaller = 0.75;
 // The far receivers of a shot are scaled by at most this factor (or its inverse) to keep the shot's total.
 constexpr double kFarChange = 1.25;
@@ -62,7 +62,7 @@ void clip_to_front_of(std::span<const Vec3> polygon, const Vec3& origin, const V
 // strip 0.003 wide along their foot, the strip's factor was far below its mean over them, and the wall got half the
 // strip's light (test NearField.ReceiversNextToASliverAreSmallerThanItsWidth). Squares, rectangles up to sides 1 : 1.7
 // and equilateral triangles are wider than their radius.
-double patch_size(std::span<const Vec3> polygon, double radius) {
+double patch_extent(std::span<const Vec3> polygon, double radius) {
   double width = radius;
   for (std::size_t v = 0; v < polygon.size(); ++v) {
     const Vec3 edge = polygon[(v + 1) % polygon.size()] - polygon[v];
@@ -162,7 +162,7 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
   const double radius = mark_near_patches(shooter);
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
-  const double size = patch_size(shooter.polygon, radius);
+  const double size = patch_extent(shooter.polygon, radius);
 
   // The receivers to look at, in order: the subset, or the receivers of near patches that candidates() listed for
   // this shooter and view, or every receiver.
