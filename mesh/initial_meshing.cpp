@@ -384,10 +384,10 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   }
   std::sort(vertices.begin(), vertices.end(), [](const Vec2& p, const Vec2& q) { return p.x < q.x; });
   // The outline of the union of the faces is the constraint: its own edges, not the faces'. An edge two faces share
-  // (once each way) is no feature of the surface, only of how the file cut it: kept, the mesher refined around it,
-  // and a CAD fan of thin triangles (a plate with a round hole, fanned from its corners) made 70 469 patches of 36
-  // triangles, the one polygon 182; the Cornell floor, cut into slabs around the blocks, had 207 patches to the
-  // ceiling's 16. So every face edge is split at the vertices of the surface that lie on it or within `weld` of it
+  // (once each way) is no feature of the surface, only of how the file cut it: kept, the mesher refined around it.
+  // A plate with a round hole written as 36 thin triangles fanned from its corners, as CAD exporters write it, made
+  // 70 469 patches (now 300), and the Cornell floor, cut into slabs around the blocks, 207 patches to the ceiling's
+  // 16 (now 91). So every face edge is split at the vertices of the surface that lie on it or within `weld` of it
   // (a T-junction, perhaps written a rounding error off the edge, as exporters do; left as it was, the sliver
   // between the edge and the vertex was a gap, which the mesher refined down to the rounding error, a crash, or
   // left as a hole), and the pieces two faces share, once each way, cancel; the rest are constraints.
