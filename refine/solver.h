@@ -49,8 +49,9 @@ struct SolverOptions {
   // patch-to-element form factor (used to check the loop against closed-form patch-to-patch values).
   int shooter_samples = 1;
   // Near-field correction (refine/near_field.h): receivers within this many patch radii of the shooting patch's
-  // centroid, and smaller than it, take the shape of their share from the patch's exact factor seen from their
-  // centroid; 0 turns it off (the paper's method: every factor from the shooting point).
+  // centroid, and smaller than it (a radius at most 3/4 of its radius and of its width), take the shape of their
+  // share from the patch's exact factor seen from their centroid; 0 turns it off (the paper's method: every factor
+  // from the shooting point).
   double near_field = 4.0;
   // Memory, in MiB, for the form factors of each patch's last shot (refine/factor_cache.h): a patch that shoots
   // again takes them, shooting only into the leaves split since, whose pieces share the factor the leaf had. The
@@ -66,7 +67,7 @@ struct SolverOptions {
   // Patch and element sizes, max level, min area, balance. The default is the hierarchy's (zeros: sizes relative
   // to the scene's diagonal), not what `aarad solve` uses for a scene that names its sizes (the built-in Cornell
   // box and office, an OBJ file with "# aarad meshing:"): set it to default_meshing(scene) to solve as the program
-  // does (on the Cornell box 1 040 initial elements and 1 133 leaves at the end, against 1 332 and 3 171).
+  // does (on the Cornell box 1 040 initial elements and 1 133 leaves at the end, against 1 332 and 3 183).
   mesh::MeshingOptions meshing;
 };
 
