@@ -2,7 +2,8 @@
 // "interrupted", "shots", "unshot_fraction", "emitted_flux", "absorbed_flux", "patches", "elements",
 // "max_level", "seconds": {"total", "form_factors", "subdivision", "output"}, "invariants": {"violations"},
 // "groups": [{"name", "area", "elements", "mean_radiosity"}]}, colours as [r, g, b]. Extra fields (the options
-// used, unshot_flux, ambient, splits) are additions; the contract's fields keep their names and meaning.
+// used, unshot_flux, escaped_flux, ambient, splits, element_limit_reached, diverged, reused_shots) are additions;
+// the contract's fields keep their names and meaning.
 #pragma once
 
 #include "mesh/invariants.h"
