@@ -152,8 +152,8 @@ SurfaceMeshing mesh_convex_quad(std::span<const Vec3> c, double patch_size, doub
 // a fan: an edge two faces share (once each way) cancels, and what is left must be one loop, of the faces' total
 // area, that is a triangle or a strictly convex quadrilateral once points exactly on a straight run (exact
 // orientation in the surface's plane) are dropped. Such a surface is meshed as that one polygon; every other
-// shape returns nullopt and goes to the Delaunay mesher, whose constraints along every face edge and minimum
-// angle would cut a two-triangle square into several times as many patches.
+// shape returns nullopt and goes to the Delaunay mesher, whose constraints along every face edge (before it took
+// the outline of the faces' union) and minimum angle cut a two-triangle square into several times as many patches.
 std::optional<std::vector<Vec3>> convex_outline(const Scene& scene, const Surface& surface, const Frame& frame) {
   using Key = std::array<double, 3>;
   const auto key = [](const Vec3& p) { return Key{p.x, p.y, p.z}; };

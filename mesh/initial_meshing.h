@@ -26,11 +26,12 @@ struct SurfaceMeshing {
   std::vector<std::vector<CornerIndices>> elements;  // per patch; they tile it
 };
 
-// A surface that is one strictly convex quadrilateral becomes a bilinear grid of quad patches (no edge
-// longer than patch_size), each patch an equal grid of quad elements (no edge longer than element_size).
-// A surface that is one triangle of positive area becomes an n x n grid of similar triangle patches (no edge
-// longer than patch_size). Any other surface (concave faces, several faces, holes) is the union of its faces,
-// triangulated by a constrained Delaunay mesher (CGAL) into triangle patches with edges no longer than
+// A surface that is one strictly convex quadrilateral (one face, or faces that tile one, as two triangles or a
+// fan) becomes a bilinear grid of quad patches (no edge longer than patch_size), each patch an equal grid of quad
+// elements (no edge longer than element_size). A surface that is one triangle of positive area (or faces tiling
+// one) becomes an n x n grid of similar triangle patches (no edge longer than patch_size). Any other surface
+// (concave faces, several faces, holes) is the union of its faces, triangulated by a constrained Delaunay mesher
+// (CGAL), with the outline of the union as the constraint, into triangle patches with edges no longer than
 // patch_size. Triangle patches are divided into m x m similar triangles (m the same over the surface, so
 // patches conform).
 // Throws aarad::Error naming the surface's group when it would make more than max_elements patches or
