@@ -387,7 +387,8 @@ void add_solve_command(CLI::App& app) {
       ->transform(whole_number_in(1, 64))
       ->capture_default_str();
   cmd->add_option("--near-field", options->solver.near_field,
-                  "Receivers within this many patch radii of the shooting patch, and smaller than it, get the shape "
+                  "Receivers within this many patch radii of the shooting patch, and smaller than it (3/4 of its "
+                  "radius and of its width), get the shape "
                   "of their share from the patch's exact factor seen from them (0: off, the paper's method)")
       ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
