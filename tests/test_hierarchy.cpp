@@ -241,12 +241,16 @@ TEST(Hierarchy, FacesTilingOneConvexPolygonAreMeshedAsThatPolygon) {
 // The edges two faces of a surface share are how the file cut it, not features of the surface: the mesher meshes
 // the outline of their union. A 64-sided disc of radius 1 written as a fan of 62 triangles from one of its corners,
 // as CAD exporters write polygons, made 5 264 patches at patch size 0.5, as one polygon 162: the fan's thin
-// triangles stayed constraints, and the angle bound refined them. Now both give the same mesh, and so does the fan with its first triangle cut
-// in two at the middle of its edge inside the disc, a T-junction on the next triangle's edge.
+// triangles stayed constraints, and the angle bound refined them. Now both give the same mesh, and so does the fan
+// with its first triangle cut in two at the middle of its edge inside the disc, a T-junction on the next triangle's
+// edge.
 TEST(Hierarchy, FacesOfOneSurfaceAreMeshedAsTheOutlineOfTheirUnion) {
   constexpr int kSides = 64;
   std::vector<Vec2> disc;
-  for (int k = 0; k < kSides; ++k) disc.emplace_back(std::cos(2.0 * kPi * k / kSides), std::sin(2.0 * kPi * k / kSides));
+  for (int k = 0; k < kSides; ++k) {
+    const double angle = 2.0 * kPi * k / kSides;
+    disc.emplace_back(std::cos(angle), std::sin(angle));
+  }
   std::vector<std::vector<Vec2>> fan;
   for (int k = 1; k + 1 < kSides; ++k) fan.push_back({disc[0], disc[k], disc[k + 1]});
   std::vector<std::vector<Vec2>> cut = fan;
