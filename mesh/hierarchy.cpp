@@ -27,13 +27,17 @@ using VertexHandle = LeafMesh::VertexHandle;
 using HalfedgeHandle = LeafMesh::HalfedgeHandle;
 using FaceHandle = LeafMesh::FaceHandle;
 
-// The boundary of a freshly meshed surface as maximal straight segments.
-SurfaceBoundary boundary_of(const LeafMesh& mesh, int first_vertex, int end_vertex) {
+// The boundary of a freshly meshed surface as maximal straight segments. The surface's vertices are
+// [first_vertex, end_vertex) and its halfedges [first_halfedge, n_halfedges()): both were added last, so `visited`
+// covers this surface's halfedges only (one array as long as the whole mesh, per surface, made a million-face
+// scene quadratic).
+SurfaceBoundary boundary_of(const LeafMesh& mesh, int first_vertex, int end_vertex, int first_halfedge) {
   SurfaceBoundary boundary;
-  std::vector<char> visited(mesh.n_halfedges(), 0);
+  std::vector<char> visited(mesh.n_halfedges() - static_cast<std::size_t>(first_halfedge), 0);
+  auto seen = [&](HalfedgeHandle e) -> char& { return visited[static_cast<std::size_t>(e.idx() - first_halfedge)]; };
   for (int vi = first_vertex; vi < end_vertex; ++vi)
     for (auto h : mesh.voh_range(VertexHandle(vi))) {
-      if (!h.is_boundary() || visited[static_cast<std::size_t>(h.idx())]) continue;
+      if (!h.is_boundary() || seen(h)) continue;
       // Walk the loop, starting right after a corner (a direction change) so segments are maximal.
       auto direction = [&](HalfedgeHandle e) {
         return to_vec3(mesh.point(mesh.to_vertex_handle(e)) - mesh.point(mesh.from_vertex_handle(e)));
@@ -51,7 +55,7 @@ SurfaceBoundary boundary_of(const LeafMesh& mesh, int first_vertex, int end_vert
       HalfedgeHandle e = start;
       Vec3 segment_start = to_vec3(mesh.point(mesh.from_vertex_handle(start)));
       do {
-        visited[static_cast<std::size_t>(e.idx())] = 1;
+        seen(e) = 1;
         boundary.length += glm::length(direction(e));
         const HalfedgeHandle next = mesh.next_halfedge_handle(e);
         if (!straight(e, next) || next == start) {
@@ -282,6 +286,7 @@ Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(
     separate_pinched_fans(meshing);
     for (const auto& elements : meshing.elements) made += static_cast<double>(elements.size());
     const int base = static_cast<int>(m.mesh.n_vertices());
+    const int first_halfedge = static_cast<int>(m.mesh.n_halfedges());
     for (const Vec3& p : meshing.points) m.mesh.add_vertex(to_point(p));
     auto shifted = [base](CornerIndices c) {
       for (int& i : c)
@@ -310,7 +315,7 @@ Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(
         ++m.initial_elements;
       }
     }
-    m.boundaries[s] = boundary_of(m.mesh, base, static_cast<int>(m.mesh.n_vertices()));
+    m.boundaries[s] = boundary_of(m.mesh, base, static_cast<int>(m.mesh.n_vertices()), first_halfedge);
   }
 }
 
