@@ -30,6 +30,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 #include <utility>
 
@@ -38,11 +39,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The words of a line: what `std::istringstream(line) >> word` reads in turn, the runs between the blanks it skips
+// in the classic locale, found without building a stream per line (a stream per line was about a fifth of
+// importing a million-face sphere).
 std::vector<std::string> split_tokens(const std::string& line) {
+  constexpr std::string_view kBlanks = " \t\n\v\f\r";
+  const std::string_view text(line);
   std::vector<std::string> tokens;
-  std::istringstream in(line);
-  std::string t;
-  while (in >> t) tokens.push_back(t);
+  for (std::size_t begin = text.find_first_not_of(kBlanks); begin != std::string_view::npos;) {
+    const std::size_t end = text.find_first_of(kBlanks, begin);
+    tokens.emplace_back(text.substr(begin, end - begin));
+    begin = end == std::string_view::npos ? end : text.find_first_not_of(kBlanks, end);
+  }
   return tokens;
 }
 
