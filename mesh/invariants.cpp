@@ -322,8 +322,11 @@ class Checker {
   // tolerance of a point of the segment extended by the tolerance at each end), so the halfedge's box meets the
   // segment's grown by four times the tolerance, far more than the rounding of on_segment. The fourth dimension
   // keeps surfaces apart. Halfedges and segments with a coordinate that is not finite are tried one by one, as
-  // before (on_segment is false for them, but a box of them is not a box).
+  // before (on_segment is false for them, but a box of them is not a box). So are the halfedges of a surface of
+  // at most kFewSegments segments, the usual case: at two boxes of 80 bytes and CGAL's copies per halfedge, boxing
+  // them took 219 MB for a 298 765-face sphere (a surface per pair of faces, heaptrack) and was slower.
   std::vector<std::uint8_t> boundary_halfedges_on_segments() const {
+    constexpr std::size_t kFewSegments = 16;
     using SegmentBox = CGAL::Box_intersection_d::Box_with_info_d<double, 4, std::uint32_t>;
     std::vector<std::uint8_t> on(mesh_.n_halfedges(), 0);
     const auto finite = [](const Vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); };
@@ -337,10 +340,11 @@ class Checker {
     };
     std::vector<SegmentRef> segments;
     std::vector<SegmentBox> segment_boxes;
-    std::vector<std::uint8_t> unboxed_segments(m_.boundaries.size(), 0);  // per surface: one not finite
+    std::vector<std::uint8_t> unboxed_segments(m_.boundaries.size(), 0);  // per surface: few, or one not finite
     const double margin = 4.0 * length_tolerance_;
-    for (std::uint32_t s = 0; s < m_.boundaries.size(); ++s)
-      for (std::uint32_t k = 0; k < m_.boundaries[s].segments.size(); ++k) {
+    for (std::uint32_t s = 0; s < m_.boundaries.size(); ++s) {
+      if (m_.boundaries[s].segments.size() <= kFewSegments) unboxed_segments[s] = 1;
+      for (std::uint32_t k = 0; k < m_.boundaries[s].segments.size() && unboxed_segments[s] == 0; ++k) {
         const auto& seg = m_.boundaries[s].segments[k];
         if (!finite(seg[0]) || !finite(seg[1])) {
           unboxed_segments[s] = 1;
@@ -350,6 +354,7 @@ class Checker {
                                     s, static_cast<std::uint32_t>(segments.size())));
         segments.push_back({s, k});
       }
+    }
     std::vector<SegmentBox> halfedge_boxes;
     const auto try_every_segment = [&](HalfedgeHandle h, std::uint32_t s) {
       const Vec3 a = point(mesh_.from_vertex_handle(h)), b = point(mesh_.to_vertex_handle(h));
