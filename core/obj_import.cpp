@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -32,6 +33,7 @@
 #include <sstream>
 #include <string_view>
 #include <tuple>
+#include <unordered_set>
 #include <utility>
 
 namespace aarad {
@@ -705,14 +707,10 @@ Scene import_obj(const std::string& obj_path) {
   // emitted flux too, while the mesh covers it once. Repeats in one group with one material (the same vertex
   // cycle, the same way round; the reverse is the back side of a two-sided panel) are skipped with a warning.
   // The same polygon in another group or material is another object and stays.
-  using FaceKey = std::tuple<std::string, std::uint32_t, std::vector<std::array<double, 3>>>;
-  std::map<FaceKey, int> face_lines;  // (group, material, canonical vertex cycle) -> its line
-  const auto cycle_key = [](const std::vector<Vec3>& polygon) {
-    std::vector<std::array<double, 3>> cycle;
-    for (const Vec3& p : polygon) cycle.push_back({p.x, p.y, p.z});
-    std::rotate(cycle.begin(), std::min_element(cycle.begin(), cycle.end()), cycle.end());
-    return cycle;
-  };
+  // A kept face is found again by a hash of (its group's number, its material, its vertex cycle from its
+  // lexicographically smallest vertex) into `kept`: a std::map keyed by a copy of the group's name and of the
+  // coordinates took about 200 bytes per face, and its string and vector comparisons a second per million faces.
+  std::map<std::string, std::uint32_t> group_numbers;  // by group name, in order of first use
 
   std::size_t face_number = 0, skipped_faces = 0;
   std::string first_skip;  // the warning of the first face checked_face skipped
@@ -720,16 +718,49 @@ Scene import_obj(const std::string& obj_path) {
   // The faces to add, once the scene's size is known (below).
   struct Kept {
     std::size_t shape;
+    std::uint32_t group_number;
     std::uint32_t material;
     std::vector<Vec3> polygon;
     int line;
     std::uint32_t smoothing;
   };
   std::vector<Kept> kept;
+  const auto first_corner = [](const std::vector<Vec3>& polygon) {
+    const auto before = [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+    return static_cast<std::size_t>(std::min_element(polygon.begin(), polygon.end(), before) - polygon.begin());
+  };
+  const auto same_face = [&kept, &first_corner](std::size_t i, std::size_t j) {
+    const Kept& a = kept[i];
+    const Kept& b = kept[j];
+    if (a.group_number != b.group_number || a.material != b.material || a.polygon.size() != b.polygon.size())
+      return false;
+    const std::size_t n = a.polygon.size(), from_a = first_corner(a.polygon), from_b = first_corner(b.polygon);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec3& p = a.polygon[(from_a + k) % n];
+      const Vec3& q = b.polygon[(from_b + k) % n];
+      if (!(p.x == q.x && p.y == q.y && p.z == q.z)) return false;
+    }
+    return true;
+  };
+  const auto face_hash = [&kept, &first_corner](std::size_t i) {
+    const Kept& a = kept[i];
+    std::uint64_t h = (std::uint64_t{a.group_number} << 32) ^ a.material;
+    const auto mix = [&h](std::uint64_t v) { h = (h ^ v) * 0x100000001b3ULL + (h >> 29); };
+    const std::size_t n = a.polygon.size(), from = first_corner(a.polygon);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec3& p = a.polygon[(from + k) % n];
+      // + 0.0 makes -0.0 the 0.0 it equals.
+      for (const double c : {p.x + 0.0, p.y + 0.0, p.z + 0.0}) mix(std::bit_cast<std::uint64_t>(c));
+    }
+    return static_cast<std::size_t>(h);
+  };
+  std::unordered_set<std::size_t, decltype(face_hash), decltype(same_face)> kept_faces(0, face_hash, same_face);
   for (std::size_t shape_index = 0; shape_index < shapes.size(); ++shape_index) {
     const auto& shape = shapes[shape_index];
     std::string group_name = trim(shape.name);
     if (group_name.empty()) group_name = stem.empty() ? std::string("default") : stem;
+    const std::uint32_t group_number =
+        group_numbers.try_emplace(group_name, static_cast<std::uint32_t>(group_numbers.size())).first->second;
     std::size_t offset = 0;
     for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face_number) {
       const int line = lines_known ? text.face_lines[face_number] : 0;
@@ -768,16 +799,17 @@ Scene import_obj(const std::string& obj_path) {
         unassigned_faces = true;
       }
       for (const auto& polygon : polygons) {
-        const auto [first, inserted] = face_lines.try_emplace(FaceKey{group_name, material, cycle_key(polygon)}, line);
+        kept.push_back({shape_index, group_number, material, polygon, line, smoothing});
+        const auto [first, inserted] = kept_faces.insert(kept.size() - 1);
         if (!inserted) {
+          kept.pop_back();
           warnings.push_back(InputError::format(obj_path, line, "face repeats the face on line " +
-                                                                    std::to_string(first->second) +
+                                                                    std::to_string(kept[*first].line) +
                                                                     " (the same vertices, the same way round, "
                                                                     "group and material); skipped, so its area and "
                                                                     "light count once"));
           continue;
         }
-        kept.push_back({shape_index, material, polygon, line, smoothing});
       }
     }
   }
