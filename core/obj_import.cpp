@@ -603,9 +603,13 @@ Scene import_obj(const std::string& obj_path) {
   Scene scene;
   scene.name = obj_path;
   std::vector<std::string>& warnings = scene.warnings;
-  const std::string cleaned = with_unnamed_groups_named(clean_text(obj_file), obj_path, warnings);
-  std::istringstream in(cleaned);
-  const ObjText text = read_obj_text(obj_path, in, warnings);
+  // The text is held once, and copies of it (a stream copies its string) only while they are read: for a
+  // million-face file each was 42 MB, and four of them stayed until the end of the import.
+  std::string cleaned = with_unnamed_groups_named(clean_text(obj_file), obj_path, warnings);
+  const ObjText text = [&] {
+    std::istringstream in(cleaned);
+    return read_obj_text(obj_path, in, warnings);
+  }();
 
   // The MTL libraries, read the same way tinyobjloader finds them: relative to the OBJ's folder.
   const fs::path folder = fs::path(obj_path).parent_path();
@@ -658,8 +662,9 @@ Scene import_obj(const std::string& obj_path) {
   // file's own `mtllib` lines are left out (the faces are matched to their lines by order, not by tinyobjloader's
   // line numbers).
   std::string parsed_text = library_statements;
+  parsed_text.reserve(library_statements.size() + cleaned.size());
   {
-    std::istringstream lines(cleaned);
+    std::istringstream lines(std::move(cleaned));  // its last use
     std::string line;
     while (std::getline(lines, line)) {
       const std::vector<std::string> t = split_tokens(line);
@@ -667,10 +672,13 @@ Scene import_obj(const std::string& obj_path) {
       parsed_text += '\n';
     }
   }
-  std::istringstream obj_text(parsed_text);
-  CleanMaterialReader material_reader(folder.empty() ? fs::path(".") : folder);
-  const bool ok = tinyobj::LoadObj(&attrib, &shapes, &parsed_materials, &tiny_warnings, &tiny_errors, &obj_text,
-                                   &material_reader, /*triangulate=*/false);
+  bool ok = false;
+  {
+    std::istringstream obj_text(std::move(parsed_text));
+    CleanMaterialReader material_reader(folder.empty() ? fs::path(".") : folder);
+    ok = tinyobj::LoadObj(&attrib, &shapes, &parsed_materials, &tiny_warnings, &tiny_errors, &obj_text,
+                          &material_reader, /*triangulate=*/false);
+  }
   if (!ok) throw InputError(obj_path, 0, "cannot parse the OBJ file: " + trim(tiny_errors));
 
   // Materials, checked against the MTL text (which knows the lines).
@@ -813,6 +821,11 @@ Scene import_obj(const std::string& obj_path) {
       }
     }
   }
+  // What only the loop above read goes: the repeat check's index and tinyobjloader's copy of the faces.
+  kept_faces.clear();
+  kept_faces.rehash(0);
+  attrib = tinyobj::attrib_t{};
+  for (tinyobj::shape_t& shape : shapes) shape.mesh = tinyobj::mesh_t{};
   // A face whose points all lie within kSmallestFace of the scene's diagonal of one another is below what the
   // meshing resolves: it welds vertices closer than kPlaneDistance of the diagonal (rounding errors of the file), so
   // such a face would collapse there, and CGAL's mesher crashed on what was left of it (a face 1 across in a scene
@@ -844,6 +857,7 @@ Scene import_obj(const std::string& obj_path) {
     }
     scene.add_face(*group, k.material, std::move(k.polygon), k.line, k.smoothing);
   }
+  std::vector<Kept>().swap(kept);
   if (unassigned_faces && text.material_uses.empty() && text.material_libraries.empty())
     warnings.push_back(InputError::format(obj_path, 0, "faces without a material use the default (reflectance 0.5 "
                                                        "grey, no emission); add an MTL file with mtllib and usemtl"));
