@@ -43,7 +43,7 @@ struct Host {
 // handles the boundary vertices that the other side of such an edge lacks.
 void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
                             std::span<const Host> host, std::vector<Rgb>& weighted, std::vector<double>& weight) {
-  const double tolerance = kPlaneDistance * m.scene.diagonal();
+  const double tolerance = kPlaneDistance * m.scene().diagonal();
   // Candidates by cell of side `tolerance` (as the initial meshing welds vertices): two within the tolerance lie in
   // the same cell or in neighbouring ones.
   struct Candidate {
@@ -56,7 +56,7 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
   std::vector<Candidate> candidates;
   for (std::size_t v = 0; v < vertex_surface.size(); ++v) {
     if (!(weight[v] > 0.0) || host[v].a >= 0) continue;
-    const Surface& surface = m.scene.surfaces[vertex_surface[v]];
+    const Surface& surface = m.scene().surfaces[vertex_surface[v]];
     if (surface.smoothing == 0) continue;
     const Vec3 p = m.point(static_cast<int>(v));
     candidates.push_back({surface.group, surface.smoothing,
@@ -125,9 +125,9 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
 // and "on the edge" mean farther than the pooling tolerance from both ends and within it of the segment.
 void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
                             std::span<const double> weight, std::vector<Host>& host) {
-  const double tolerance = kPlaneDistance * m.scene.diagonal();
+  const double tolerance = kPlaneDistance * m.scene().diagonal();
   const auto surface_of = [&](int v) -> const Surface& {
-    return m.scene.surfaces[vertex_surface[static_cast<std::size_t>(v)]];
+    return m.scene().surfaces[vertex_surface[static_cast<std::size_t>(v)]];
   };
   // Boundary edges of smoothing surfaces, entered in a grid at points along them no farther apart than a quarter of
   // the cell side: a point on the segment lies within an eighth of a side of one of them, so a vertex within the
@@ -287,7 +287,7 @@ DisplayMesh build_display_mesh(const Hierarchy& hierarchy, std::span<const Rgb> 
   }
   // Smoothing groups: nothing of it runs for a scene without one.
   const auto smoothing = [](const Surface& surface) { return surface.smoothing != 0; };
-  if (std::any_of(m.scene.surfaces.begin(), m.scene.surfaces.end(), smoothing)) {
+  if (std::any_of(m.scene().surfaces.begin(), m.scene().surfaces.end(), smoothing)) {
     pool_smoothed_vertices(m, vertex_surface, host, weighted, weight);
     hang_smoothed_vertices(m, vertex_surface, weight, host);
   }

@@ -267,12 +267,18 @@ double Hierarchy::Impl::corner_area(NodeId node) const {
 
 // --- Construction ---------------------------------------------------------------------------------------------
 
-Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options) : impl_(std::make_unique<Impl>()) {
+Hierarchy::Hierarchy(const Scene& scene, const MeshingOptions& options)
+    : Hierarchy(std::make_shared<const Scene>(scene), options) {}
+
+Hierarchy::Hierarchy(std::shared_ptr<const Scene> scene_ptr, const MeshingOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  if (!scene_ptr) throw Error("Hierarchy: no scene (a null pointer)");
+  const Scene& scene = *scene_ptr;
   // Importers and built-ins validate their scenes; one built in code may not have been, and the initial meshing
   // crashes (in CGAL's mesher) on a face that validate() refuses, and meshes nothing without build_surfaces().
   scene.validate();
   Impl& m = *impl_;
-  m.scene = scene;
+  m.scene_ptr = std::move(scene_ptr);
   m.options = resolve_options(scene, options);
   m.mesh.add_property(m.face_node, "node");
   m.boundaries.resize(scene.surfaces.size());
@@ -331,7 +337,7 @@ void Hierarchy::require_leaf(NodeId node, const char* query) const {
     throw Error(std::string("Hierarchy::") + query + ": node " + std::to_string(node) + " is not a leaf");
 }
 
-const Scene& Hierarchy::scene() const { return impl_->scene; }
+const Scene& Hierarchy::scene() const { return impl_->scene(); }
 const MeshingOptions& Hierarchy::options() const { return impl_->options; }
 std::size_t Hierarchy::node_count() const { return impl_->parent.size(); }
 std::span<const NodeId> Hierarchy::patches() const { return impl_->patch_ids; }
@@ -344,7 +350,7 @@ int Hierarchy::level(NodeId node) const { return impl_->level[node]; }
 NodeId Hierarchy::patch(NodeId node) const { return impl_->patch_of[node]; }
 std::uint32_t Hierarchy::surface(NodeId node) const { return impl_->surface[node]; }
 double Hierarchy::area(NodeId node) const { return impl_->area[node]; }
-const Plane& Hierarchy::plane(NodeId node) const { return impl_->scene.surfaces[impl_->surface[node]].plane; }
+const Plane& Hierarchy::plane(NodeId node) const { return impl_->scene().surfaces[impl_->surface[node]].plane; }
 int Hierarchy::corner_count(NodeId node) const { return impl_->corner_count(node); }
 
 void Hierarchy::corners(NodeId node, std::vector<Vec3>& out) const {

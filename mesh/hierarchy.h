@@ -48,6 +48,10 @@ class Hierarchy {
   // Meshes a copy of `scene`. Throws what Scene::validate() throws first (a scene built in code whose surfaces are
   // not built, or with a face the initial meshing cannot take), and aarad::Error for bad options.
   Hierarchy(const Scene& scene, const MeshingOptions& options);
+  // Meshes `*scene` and reads it through the pointer for the hierarchy's life, without a copy (a million-face scene
+  // is some 200 MB). A pointer that owns nothing (std::shared_ptr's aliasing constructor) shares a scene its caller
+  // keeps alive, as refine::Solver does. Throws as above, and aarad::Error for a null pointer.
+  Hierarchy(std::shared_ptr<const Scene> scene, const MeshingOptions& options);
   ~Hierarchy();
   Hierarchy(Hierarchy&&) noexcept;
   Hierarchy& operator=(Hierarchy&&) noexcept;

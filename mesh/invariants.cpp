@@ -34,10 +34,10 @@ class Checker {
  public:
   explicit Checker(const Hierarchy& h) : h_(h), m_(h.impl()), mesh_(m_.mesh) {
     double largest = 0.0;
-    for (const Face& face : m_.scene.faces)
+    for (const Face& face : m_.scene().faces)
       for (const Vec3& p : face.vertices) largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
     position_error_ = kPositionUlps * std::numeric_limits<double>::epsilon() * largest;
-    length_tolerance_ = std::max(kLengthTolerance * m_.scene.diagonal(), position_error_);
+    length_tolerance_ = std::max(kLengthTolerance * m_.scene().diagonal(), position_error_);
   }
 
   static double perimeter(std::span<const Vec3> corners) {
@@ -129,7 +129,7 @@ class Checker {
   void check_surface_planes() {
     std::vector<Vec3> corners;
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
-      if (m_.surface[n] >= m_.scene.surfaces.size()) continue;  // reported by check_tree
+      if (m_.surface[n] >= m_.scene().surfaces.size()) continue;  // reported by check_tree
       const Plane& plane = h_.plane(n);
       h_.corners(n, corners);
       for (const Vec3& p : corners) {
@@ -144,7 +144,7 @@ class Checker {
   void check_tree() {
     std::size_t roots = 0;
     for (NodeId n = 0; n < m_.parent.size(); ++n) {
-      if (m_.surface[n] >= m_.scene.surfaces.size())
+      if (m_.surface[n] >= m_.scene().surfaces.size())
         report("levels-parents", n, "node ", n, " names surface ", m_.surface[n], ", which does not exist");
       const NodeId p = m_.parent[n];
       if (p == kNoNode) {

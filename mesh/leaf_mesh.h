@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace aarad::mesh {
@@ -36,7 +37,8 @@ struct SurfaceBoundary {
 };
 
 struct Hierarchy::Impl {
-  Scene scene;             // a copy: the hierarchy never dangles
+  std::shared_ptr<const Scene> scene_ptr;  // a copy of the scene, or the caller's (Hierarchy's constructors)
+  const Scene& scene() const { return *scene_ptr; }
   MeshingOptions options;  // defaults resolved
 
   LeafMesh mesh;

@@ -113,7 +113,8 @@ Solver::Solver(const Scene& scene, const SolverOptions& options,
                std::unique_ptr<formfactor::FormFactorBackend> backend)
     : scene_(scene),
       options_(options),
-      hierarchy_(scene, options.meshing),
+      // The scene outlives the solver (solver.h): the hierarchy shares it, through a pointer that owns nothing.
+      hierarchy_(std::shared_ptr<const Scene>(std::shared_ptr<const Scene>(), &scene), options.meshing),
       backend_(std::move(backend)),
       shooter_lift_(shooter_lift(scene)),
       near_field_(options.near_field),

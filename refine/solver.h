@@ -95,8 +95,9 @@ struct SolverTimes {
 
 class Solver {
  public:
-  // `scene` must outlive the solver. Builds the hierarchy, sets B = E for every node and dB = E for every
-  // patch, and creates the back end by name (throws aarad::Error for unknown names or bad options).
+  // `scene` must outlive the solver and its hierarchy, which reads it without a copy. Builds the hierarchy, sets
+  // B = E for every node and dB = E for every patch, and creates the back end by name (throws aarad::Error for
+  // unknown names or bad options).
   Solver(const Scene& scene, const SolverOptions& options);
   // With a caller-supplied back end (tests, custom back ends).
   Solver(const Scene& scene, const SolverOptions& options, std::unique_ptr<formfactor::FormFactorBackend> backend);

@@ -6,6 +6,7 @@
 #include "mesh/initial_meshing.h"
 #include "mesh/invariants.h"
 #include "mesh/leaf_mesh.h"
+#include "refine/solver.h"
 #include "solver_test_scenes.h"
 #include "test_hierarchy_scenes.h"
 
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <set>
 #include <string>
 #include <tuple>
@@ -48,6 +50,26 @@ TEST(Hierarchy, DefaultsAreRelativeToTheSceneDiagonal) {
   EXPECT_EQ(h.patches().size(), 36u);
   EXPECT_EQ(h.initial_element_count(), 144u);
   EXPECT_EQ(h.leaf_count(), 144u);
+}
+
+// A hierarchy made from a const Scene& keeps a copy and outlives the scene; one made from a shared_ptr reads the
+// scene it points to (a solver's hierarchy shares the solver's scene: a copy was some 200 MB for a million faces).
+TEST(Hierarchy, KeepsACopyOfTheSceneOrSharesTheOneItIsGiven) {
+  auto scene = std::make_shared<Scene>(test::square_scene());
+  const Hierarchy copied(*scene, MeshingOptions{});
+  const Hierarchy shared(std::shared_ptr<const Scene>(scene), MeshingOptions{});
+  EXPECT_NE(&copied.scene(), scene.get());
+  EXPECT_EQ(&shared.scene(), scene.get());
+  EXPECT_EQ(copied.leaf_count(), 144u);
+  EXPECT_EQ(shared.leaf_count(), 144u);
+  scene.reset();  // `shared` holds it now
+  EXPECT_EQ(shared.scene().faces.size(), 1u);
+  EXPECT_EQ(copied.scene().faces.size(), 1u);
+  EXPECT_THROW(Hierarchy(std::shared_ptr<const Scene>(), MeshingOptions{}), Error);
+  // The solver's hierarchy reads the solver's scene.
+  const Scene cornell = load_scene("cornell");
+  const refine::Solver solver(cornell, refine::SolverOptions{});
+  EXPECT_EQ(&solver.hierarchy().scene(), &cornell);
 }
 
 // A scene built in code reaches the hierarchy without passing through an importer: it is validated there. A
