@@ -473,6 +473,28 @@ TEST(Cli, APatchSizeOnTheCommandLineReplacesTheScenesSizes) {
   EXPECT_LT(options["patch_size"].get<double>(), 140.0);  // d / 8
 }
 
+// A scene file whose name starts with '-' reads as an option. CLI11 said only "scene is required"; the error now
+// names the file and says to give it after '--', which works.
+TEST(Cli, ASceneFileNamedWithALeadingDashIsNamedWithTheWayToGiveIt) {
+  const fs::path dir = work_dir() / "dash";
+  fs::create_directories(dir);
+  fs::copy_file(fs::path(AARAD_SOURCE_DIR) / "data/scenes/cornell.obj", dir / "-box.obj",
+                fs::copy_options::overwrite_existing);
+  fs::copy_file(fs::path(AARAD_SOURCE_DIR) / "data/scenes/cornell.mtl", dir / "cornell.mtl",
+                fs::copy_options::overwrite_existing);
+  const std::string program = AARAD_BINARY_DIR "/apps/aarad/aarad";
+  const auto run_in_dir = [&](const std::string& args) {
+    const std::string command = "cd " + dir.string() + " && " + program + " " + args + " > out.txt 2> err.txt";
+    const int status = std::system(command.c_str());
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir / "err.txt"));
+  };
+  const auto [code, err] = run_in_dir("inspect -box.obj");
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(err.find("'-box.obj' is a file"), std::string::npos) << err;
+  EXPECT_NE(err.find("(aarad inspect -- -box.obj)"), std::string::npos) << err;
+  EXPECT_EQ(run_in_dir("inspect -- -box.obj").first, 0);
+}
+
 // The summary names the folder as given, without doubling its trailing separator ("wrote o//:" before).
 TEST(Cli, TheSummaryNamesAnOutputFolderGivenWithATrailingSeparatorOnce) {
   const std::string dir = (work_dir() / "trailing").string();
