@@ -18,18 +18,9 @@ namespace {
 // Parses the command line and runs the command; returns the exit code of docs/solver.md.
 int run(int argc, char** argv) {
   CLI::App app{"aarad: progressive-refinement radiosity with anti-aliased hemicubes"};
-  // A scene file whose name starts with '-' reads as an option ("scene is required" was all CLI11 said): the
-  // usage error names it and says how to give it.
-  std::string dash_file;
-  for (int i = 2; i < argc && dash_file.empty(); ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--") break;
-    std::error_code error;
-    if (arg.size() > 1 && arg[0] == '-' && std::filesystem::is_regular_file(arg, error)) dash_file = arg;
-  }
   // Usage errors read like every other error, and say where the options are listed. Set before the commands are
   // added: each takes its parent's.
-  app.failure_message([&dash_file](const CLI::App* parsed, const CLI::Error& e) {
+  app.failure_message([argc, argv](const CLI::App* parsed, const CLI::Error& e) {
     std::string what = e.what();
     // CLI11's words for an option given twice ("--resolution: At Most 1 required but received 2").
     static const std::regex kGivenTwice(R"(^(\S+): At Most 1 required but received (\d+)$)");
@@ -42,9 +33,15 @@ int run(int argc, char** argv) {
       help = "aarad " + command->get_name() + " --help";
       command_name = command->get_name();
     }
-    if (!dash_file.empty()) {
-      what += "; '" + dash_file + "' is a file, but a name starting with '-' reads as an option: give it after "
-              "'--' (aarad " + command_name + " -- " + dash_file + ")";
+    // A scene file whose name starts with '-' reads as an option ("scene is required" was all CLI11 said).
+    for (int i = 2; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if (arg == "--") break;
+      std::error_code error;
+      if (arg.size() < 2 || arg[0] != '-' || !std::filesystem::is_regular_file(arg, error)) continue;
+      what += "; '" + arg + "' is a file, but a name starting with '-' reads as an option: give it after '--' "
+              "(aarad " + command_name + " -- " + arg + ")";
+      break;
     }
     return "aarad: error: " + what + " (" + help + " lists the options)\n";
   });
