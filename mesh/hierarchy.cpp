@@ -285,10 +285,11 @@ Hierarchy::Hierarchy(std::shared_ptr<const Scene> scene_ptr, const MeshingOption
   m.revision = 1;  // the initial leaves' loop_revision
   double made = 0.0;  // initial elements so far, against max_initial_elements
   const double diagonal = scene.diagonal();
+  const std::vector<std::vector<ContactSegment>> contacts = find_contact_lines(scene, diagonal);
   for (std::uint32_t s = 0; s < scene.surfaces.size(); ++s) {
     const double limit = m.options.max_initial_elements;
-    SurfaceMeshing meshing =
-        mesh_surface(scene, s, m.options.patch_size, m.options.element_size, limit - made, limit, diagonal);
+    SurfaceMeshing meshing = mesh_surface(scene, s, m.options.patch_size, m.options.element_size, limit - made,
+                                          limit, diagonal, contacts[s]);
     separate_pinched_fans(meshing);
     for (const auto& elements : meshing.elements) made += static_cast<double>(elements.size());
     const int base = static_cast<int>(m.mesh.n_vertices());

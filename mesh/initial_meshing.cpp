@@ -25,6 +25,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -483,6 +484,329 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   return out;
 }
 
+
+// Cuts the meshing along the contact lines of the surface (mesh/contact_lines.h; docs/hierarchy.md, "Contact
+// lines"): a patch that a contact segment crosses, or whose outline a segment ends on, is no longer a shooter whose
+// one point stands for both sides of the line. The patches so touched (the region) are triangulated again, as one
+// constrained Delaunay triangulation (CGAL) of
+// - the region's outline: the element edges of its patches that no other patch of the region shares, with every
+//   point on them, so the patches around the region keep their element edges and the mesh stays conforming;
+// - the element corners inside the region, as plain points, except those within a quarter of an element's size of
+//   a contact segment (they would make slivers along it);
+// - the contact segments, as constraints, ends within `weld` of a region point taken as that point and cut at the
+//   outline points they pass within `weld` of (where they cross the surface's own outline, CGAL puts the crossing).
+// No Delaunay refinement: it would split the outline's edges, which the patches around the region share. Every
+// triangle inside the region becomes a patch of one element. Patches the segments do not touch keep their bits.
+void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& plane,
+                        std::span<const ContactSegment> contacts, double weld) {
+  if (contacts.empty() || out.patches.empty()) return;
+  const auto count = [](const CornerIndices& c) { return c[3] < 0 ? 3 : 4; };
+  std::vector<Vec2> at(out.points.size());
+  for (std::size_t i = 0; i < out.points.size(); ++i) at[i] = frame.to_2d(out.points[i]);
+  struct Segment {
+    Vec2 a, b;
+    Vec3 a3, b3;
+  };
+  std::vector<Segment> segments;
+  for (const ContactSegment& c : contacts) {
+    const Vec2 a = frame.to_2d(c.a), b = frame.to_2d(c.b);
+    if (glm::length(b - a) > weld) segments.push_back({a, b, c.a, c.b});
+  }
+  // Per patch: its corners in 2D and the points of its elements.
+  const std::size_t patches = out.patches.size();
+  std::vector<std::vector<int>> element_points(patches);
+  for (std::size_t p = 0; p < patches; ++p) {
+    for (const CornerIndices& e : out.elements[p])
+      for (int k = 0; k < count(e); ++k) element_points[p].push_back(e[static_cast<std::size_t>(k)]);
+    std::sort(element_points[p].begin(), element_points[p].end());
+    element_points[p].erase(std::unique(element_points[p].begin(), element_points[p].end()), element_points[p].end());
+  }
+  // Distance from x to the line of the directed edge (c, d), positive on its left (inside a counter-clockwise patch).
+  const auto inside_distance = [](const Vec2& c, const Vec2& d, const Vec2& x) {
+    const Vec2 e = d - c;
+    return (e.x * (x.y - c.y) - e.y * (x.x - c.x)) / glm::length(e);
+  };
+  // Whether segment s crosses patch p (a piece longer than `weld` inside it, farther than `weld` from its outline),
+  // or, with `ends`, has an end within `weld` of it that is none of its points (the patch must then take the end on
+  // its outline, for the mesh to stay conforming).
+  const auto touches = [&](const Segment& s, std::size_t p, bool ends) {
+    const CornerIndices& c = out.patches[p];
+    const int n = count(c);
+    const auto corner = [&](int k) { return at[static_cast<std::size_t>(c[static_cast<std::size_t>(k % n)])]; };
+    const auto depth = [&](const Vec2& x) {  // the least inside distance over the edges
+      double least = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < n; ++k) least = std::min(least, inside_distance(corner(k), corner(k + 1), x));
+      return least;
+    };
+    double t0 = 0.0, t1 = 1.0;  // the part of the segment inside the patch (Cyrus and Beck)
+    for (int k = 0; k < n && t0 <= t1; ++k) {
+      const double da = inside_distance(corner(k), corner(k + 1), s.a);
+      const double db = inside_distance(corner(k), corner(k + 1), s.b);
+      if (da < 0.0 && db < 0.0)
+        t1 = -1.0;
+      else if (da < 0.0)
+        t0 = std::max(t0, da / (da - db));
+      else if (db < 0.0)
+        t1 = std::min(t1, da / (da - db));
+    }
+    if (t0 <= t1 && (t1 - t0) * glm::length(s.b - s.a) > weld && depth(s.a + 0.5 * (t0 + t1) * (s.b - s.a)) > weld)
+      return true;
+    if (!ends) return false;
+    for (const Vec2& end : {s.a, s.b}) {
+      if (depth(end) < -weld) continue;
+      bool known = false;
+      for (const int q : element_points[p]) known = known || glm::length(at[static_cast<std::size_t>(q)] - end) <= weld;
+      if (!known) return true;
+    }
+    return false;
+  };
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 2, std::uint32_t>;
+  std::vector<Box> patch_boxes, segment_boxes;
+  for (std::uint32_t p = 0; p < patches; ++p) {
+    Vec2 low = at[static_cast<std::size_t>(out.patches[p][0])], high = low;
+    for (int k = 1; k < count(out.patches[p]); ++k) {
+      low = glm::min(low, at[static_cast<std::size_t>(out.patches[p][static_cast<std::size_t>(k)])]);
+      high = glm::max(high, at[static_cast<std::size_t>(out.patches[p][static_cast<std::size_t>(k)])]);
+    }
+    double lo[2] = {low.x - weld, low.y - weld}, hi[2] = {high.x + weld, high.y + weld};
+    patch_boxes.emplace_back(lo, hi, p);
+  }
+  for (std::uint32_t i = 0; i < segments.size(); ++i) {
+    const Vec2 low = glm::min(segments[i].a, segments[i].b), high = glm::max(segments[i].a, segments[i].b);
+    double lo[2] = {low.x, low.y}, hi[2] = {high.x, high.y};
+    segment_boxes.emplace_back(lo, hi, i);
+  }
+  // The segments that cross a patch cut it, and every patch their ends touch. A segment along the outline, or
+  // outside the surface, cuts nothing, wherever its ends lie.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> meeting;  // (patch, segment) whose boxes meet
+  CGAL::box_intersection_d(
+      patch_boxes.begin(), patch_boxes.end(), segment_boxes.begin(), segment_boxes.end(),
+      [&](const Box& patch, const Box& segment) { meeting.emplace_back(patch.info(), segment.info()); });
+  std::vector<std::uint8_t> cut(patches, 0), used(segments.size(), 0);
+  for (const auto& [patch, segment] : meeting)
+    if (touches(segments[segment], patch, false)) used[segment] = 1;
+  for (const auto& [patch, segment] : meeting)
+    if (used[segment] != 0 && touches(segments[segment], patch, true)) cut[patch] = 1;
+  if (std::find(cut.begin(), cut.end(), 1) == cut.end()) return;
+
+  // The region's outline: directed element edges whose reverse no element of the region has.
+  std::map<std::pair<int, int>, int> edges;
+  double element_area = 0.0;
+  std::size_t element_count = 0;
+  for (std::size_t p = 0; p < patches; ++p) {
+    if (cut[p] == 0) continue;
+    for (const CornerIndices& e : out.elements[p]) {
+      const int n = count(e);
+      std::vector<Vec2> corners;
+      for (int k = 0; k < n; ++k) {
+        const int a = e[static_cast<std::size_t>(k)], b = e[static_cast<std::size_t>((k + 1) % n)];
+        corners.push_back(at[static_cast<std::size_t>(a)]);
+        if (edges.erase({b, a}) == 0) ++edges[{a, b}];
+      }
+      element_area += std::abs(signed_area(corners));
+      ++element_count;
+    }
+  }
+  // Region points by 2D position: the outline's (kept whatever the segments) and the inside ones.
+  std::map<std::pair<double, double>, int> index_of;
+  std::vector<int> outline_points;
+  for (const auto& [ends, n] : edges) {
+    for (const int v : {ends.first, ends.second})
+      if (index_of.emplace(std::make_pair(at[static_cast<std::size_t>(v)].x, at[static_cast<std::size_t>(v)].y), v)
+              .second)
+        outline_points.push_back(v);
+  }
+  // Distance from x to segment s.
+  const auto distance = [](const Segment& s, const Vec2& x) {
+    const Vec2 d = s.b - s.a;
+    const double t = std::clamp(glm::dot(x - s.a, d) / glm::dot(d, d), 0.0, 1.0);
+    return glm::length(x - (s.a + t * d));
+  };
+  const double clear = std::max(2.0 * weld, 0.5 * std::sqrt(element_area / static_cast<double>(element_count)));
+  std::vector<int> inside_points;
+  for (std::size_t p = 0; p < patches; ++p) {
+    if (cut[p] == 0) continue;
+    for (const int v : element_points[p]) {
+      const Vec2& x = at[static_cast<std::size_t>(v)];
+      if (index_of.count({x.x, x.y}) != 0) continue;
+      bool near = false;
+      for (std::size_t i = 0; i < segments.size() && !near; ++i)
+        near = used[i] != 0 && distance(segments[i], x) <= clear;
+      if (near) continue;
+      index_of.emplace(std::make_pair(x.x, x.y), v);
+      inside_points.push_back(v);
+    }
+  }
+
+  // The outline's pieces, and where the segments meet them: ends within `weld` of a piece are moved onto it, and
+  // crossings are put on it, each computed once from the piece's own ends, so the segment and the outline share
+  // the point bit for bit and no constraint crosses another there.
+  struct Piece {
+    int a, b;
+    std::vector<std::pair<double, Vec2>> stops;  // parameter along a -> b, point
+  };
+  std::vector<Piece> pieces;
+  for (const auto& [ends, n] : edges) pieces.push_back({ends.first, ends.second, {}});
+  const auto cross = [](const Vec2& p, const Vec2& q) { return p.x * q.y - p.y * q.x; };
+  std::map<std::pair<double, double>, Vec3> segment_ends;  // new points that are a segment's end, on the plane
+  const double slack = plane_slack(out.points, 0.0);
+  std::vector<std::pair<Vec2, Vec2>> contact_pieces;
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    if (used[i] == 0) continue;
+    const Segment& s = segments[i];
+    const Vec2 d = s.b - s.a;
+    std::vector<std::pair<double, Vec2>> stops;
+    for (const auto& [end, end3, t] : {std::tuple{s.a, s.a3, 0.0}, std::tuple{s.b, s.b3, 1.0}}) {
+      Vec2 moved = end;
+      bool placed = false;
+      for (const int v : outline_points)
+        if (!placed && glm::length(at[static_cast<std::size_t>(v)] - end) <= weld) {
+          moved = at[static_cast<std::size_t>(v)];
+          placed = true;
+        }
+      for (Piece& piece : pieces) {
+        if (placed) break;
+        const Vec2 a = at[static_cast<std::size_t>(piece.a)], e = at[static_cast<std::size_t>(piece.b)] - a;
+        const double u = glm::dot(end - a, e) / glm::dot(e, e);
+        if (!(u > 0.0 && u < 1.0) || glm::length(end - (a + u * e)) > weld) continue;
+        moved = a + u * e;
+        piece.stops.emplace_back(u, moved);
+        placed = true;
+      }
+      if (!placed) segment_ends.emplace(std::make_pair(end.x, end.y), onto_plane(end3, plane, slack));
+      stops.emplace_back(t, moved);
+    }
+    for (const int v : outline_points) {
+      const Vec2& x = at[static_cast<std::size_t>(v)];
+      const double t = glm::dot(x - s.a, d) / glm::dot(d, d);
+      if (t > 0.0 && t < 1.0 && distance(s, x) <= weld) stops.emplace_back(t, x);
+    }
+    for (Piece& piece : pieces) {
+      const Vec2 a = at[static_cast<std::size_t>(piece.a)], b = at[static_cast<std::size_t>(piece.b)], e = b - a;
+      const double denominator = cross(d, e);
+      if (denominator == 0.0) continue;
+      const double t = cross(a - s.a, e) / denominator, u = cross(a - s.a, d) / denominator;
+      if (!(t > 0.0 && t < 1.0 && u > 0.0 && u < 1.0)) continue;
+      const Vec2 x = a + u * e;
+      if (glm::length(x - a) <= weld || glm::length(x - b) <= weld || glm::length(x - s.a) <= weld ||
+          glm::length(x - s.b) <= weld)
+        continue;  // at a point already taken
+      piece.stops.emplace_back(u, x);
+      stops.emplace_back(t, x);
+    }
+    std::sort(stops.begin(), stops.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+    for (std::size_t k = 0; k + 1 < stops.size(); ++k) {
+      const Vec2 from = stops[k].second, to = stops[k + 1].second;
+      if (glm::length(to - from) <= weld) continue;
+      // A piece along the outline needs no cut: the outline is one already.
+      const Vec2 middle = 0.5 * (from + to);
+      bool along = false;
+      for (const Piece& piece : pieces) {
+        const Segment edge{at[static_cast<std::size_t>(piece.a)], at[static_cast<std::size_t>(piece.b)], {}, {}};
+        along = along || distance(edge, middle) <= weld;
+      }
+      if (!along) contact_pieces.emplace_back(from, to);
+    }
+  }
+
+  Cdt cdt;
+  using Key2 = std::pair<double, double>;
+  const auto key2 = [](const Vec2& p) { return Key2{p.x, p.y}; };
+  std::set<std::pair<Key2, Key2>> outline;  // the outline's constraint pieces, both ways round
+  for (Piece& piece : pieces) {
+    std::sort(piece.stops.begin(), piece.stops.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+    Vec2 from = at[static_cast<std::size_t>(piece.a)];
+    piece.stops.emplace_back(1.0, at[static_cast<std::size_t>(piece.b)]);
+    for (const auto& [u, to] : piece.stops) {
+      if (to == from) continue;
+      cdt.insert_constraint(Point2(from.x, from.y), Point2(to.x, to.y));
+      outline.insert({key2(from), key2(to)});
+      outline.insert({key2(to), key2(from)});
+      from = to;
+    }
+  }
+  for (const int v : inside_points)
+    cdt.insert(Point2(at[static_cast<std::size_t>(v)].x, at[static_cast<std::size_t>(v)].y));
+  for (const auto& [from, to] : contact_pieces) cdt.insert_constraint(Point2(from.x, from.y), Point2(to.x, to.y));
+
+  // Inside the region: faces reached from the unbounded side across an odd number of the outline's edges (the
+  // segments' own edges are crossed freely).
+  std::map<Cdt::Face_handle, int> depth_of;
+  std::vector<std::pair<Cdt::Face_handle, int>> stack{{cdt.infinite_face(), 0}};
+  std::vector<Cdt::Face_handle> next_level;
+  int level = 0;
+  while (!stack.empty()) {
+    while (!stack.empty()) {
+      const auto [f, depth] = stack.back();
+      stack.pop_back();
+      if (!depth_of.emplace(f, depth).second) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Cdt::Face_handle g = f->neighbor(k);
+        if (depth_of.count(g) != 0) continue;
+        const Point2& p = f->vertex(Cdt::cw(k))->point();
+        const Point2& q = f->vertex(Cdt::ccw(k))->point();
+        if (f->is_constrained(k) && outline.count({{p.x(), p.y()}, {q.x(), q.y()}}) != 0) {
+          next_level.push_back(g);
+        } else {
+          stack.emplace_back(g, depth);
+        }
+      }
+    }
+    ++level;
+    for (const Cdt::Face_handle g : next_level)
+      if (depth_of.count(g) == 0) stack.emplace_back(g, level);
+    next_level.clear();
+  }
+  std::vector<Cdt::Face_handle> faces;
+  std::vector<std::uint8_t> inside;
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    faces.push_back(f);
+    inside.push_back(static_cast<std::uint8_t>(depth_of[f] % 2));
+  }
+  SurfaceMeshing result;
+  result.points = std::move(out.points);
+  for (std::size_t p = 0; p < patches; ++p) {
+    if (cut[p] != 0) continue;
+    result.patches.push_back(out.patches[p]);
+    result.elements.push_back(std::move(out.elements[p]));
+  }
+  const auto vertex = [&](Cdt::Vertex_handle h) {
+    const std::pair<double, double> key{h->point().x(), h->point().y()};
+    auto [it, added] = index_of.emplace(key, static_cast<int>(result.points.size()));
+    if (added) {
+      const auto end = segment_ends.find(key);
+      result.points.push_back(
+          end != segment_ends.end() ? end->second : onto_plane(frame.to_3d({key.first, key.second}), plane, slack));
+    }
+    return it->second;
+  };
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (inside[i] == 0) continue;
+    const CornerIndices triangle{vertex(faces[i]->vertex(0)), vertex(faces[i]->vertex(1)), vertex(faces[i]->vertex(2)),
+                                 -1};
+    result.patches.push_back(triangle);
+    result.elements.push_back({triangle});
+  }
+  // The element corners left out of the region are no longer used: the points are renumbered without them.
+  std::vector<int> renumbered(result.points.size(), -1);
+  std::vector<Vec3> points;
+  for (std::vector<CornerIndices>& elements : result.elements)
+    for (CornerIndices& e : elements)
+      for (int k = 0; k < count(e); ++k) {
+        int& v = renumbered[static_cast<std::size_t>(e[static_cast<std::size_t>(k)])];
+        if (v < 0) {
+          v = static_cast<int>(points.size());
+          points.push_back(result.points[static_cast<std::size_t>(e[static_cast<std::size_t>(k)])]);
+        }
+        e[static_cast<std::size_t>(k)] = v;
+      }
+  for (CornerIndices& c : result.patches)
+    for (int k = 0; k < count(c); ++k)
+      c[static_cast<std::size_t>(k)] = renumbered[static_cast<std::size_t>(c[static_cast<std::size_t>(k)])];
+  result.points = std::move(points);
+  out = std::move(result);
+}
+
 }  // namespace
 
 MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options) {
@@ -503,13 +827,15 @@ MeshingOptions resolve_options(const Scene& scene, const MeshingOptions& options
 }
 
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double patch_size, double element_size,
-                            double max_elements, double scene_limit, double diagonal) {
+                            double max_elements, double scene_limit, double diagonal,
+                            std::span<const ContactSegment> contacts) {
   const Surface& surface = scene.surfaces.at(surface_id);
   const Budget budget{scene, surface, max_elements, scene_limit, diagonal};
   const std::vector<Vec3>& first = scene.faces[surface.faces.front()].vertices;
   const Frame frame = frame_of(surface.plane, first.front());
   std::optional<std::vector<Vec3>> outline =
       surface.faces.size() == 1 ? std::optional<std::vector<Vec3>>(first) : convex_outline(scene, surface, frame);
+  std::optional<SurfaceMeshing> meshing;
   if (outline) {
     // The grids interpolate between the corners, so a corner that import let off the surface's plane (faces
     // within 1e-6 of the diagonal join a surface) would take whole rows of patches off it: such corners are
@@ -520,11 +846,13 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
     // its AA hemicube factors summed to 1 - 2.2e-3, taking each overlap for one surface in front of another).
     const double off = plane_slack(*outline, diagonal);
     for (Vec3& p : *outline) p = onto_plane(p, surface.plane, off);
-    if (strictly_convex_quad(*outline, frame)) return mesh_convex_quad(*outline, patch_size, element_size, budget);
-    if (outline->size() == 3 && aarad::area(*outline) > 0.0)
-      return mesh_triangle(*outline, patch_size, element_size, budget);
+    if (strictly_convex_quad(*outline, frame)) meshing = mesh_convex_quad(*outline, patch_size, element_size, budget);
+    else if (outline->size() == 3 && aarad::area(*outline) > 0.0)
+      meshing = mesh_triangle(*outline, patch_size, element_size, budget);
   }
-  return mesh_general(scene, surface, patch_size, element_size, budget);
+  if (!meshing) meshing = mesh_general(scene, surface, patch_size, element_size, budget);
+  cut_along_contacts(*meshing, frame, surface.plane, contacts, kPlaneDistance * diagonal);
+  return std::move(*meshing);
 }
 
 }  // namespace aarad::mesh

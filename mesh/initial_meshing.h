@@ -3,10 +3,12 @@
 #pragma once
 
 #include "core/scene.h"
+#include "mesh/contact_lines.h"
 #include "mesh/hierarchy.h"
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace aarad::mesh {
@@ -40,7 +42,10 @@ struct SurfaceMeshing {
 // Delaunay-meshed surface: bounded by its area before the mesher runs, counted exactly after it.
 // `diagonal` is scene.diagonal(), given by the caller: computing it reads every face, and a scene of n faces has
 // up to n surfaces.
+// `contacts` are the surface's contact lines (find_contact_lines): the patches they cross are cut along them
+// (docs/hierarchy.md, "Contact lines").
 SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface, double patch_size, double element_size,
-                            double max_elements, double scene_limit, double diagonal);
+                            double max_elements, double scene_limit, double diagonal,
+                            std::span<const ContactSegment> contacts = {});
 
 }  // namespace aarad::mesh

@@ -2,6 +2,7 @@
 // balance, neighbours and radiosity inheritance. Expected numbers follow from the scene geometry by hand.
 #include "core/builtin_scenes.h"
 #include "core/error.h"
+#include "mesh/contact_lines.h"
 #include "mesh/hierarchy.h"
 #include "mesh/initial_meshing.h"
 #include "mesh/invariants.h"
@@ -290,6 +291,62 @@ TEST(Hierarchy, FacesOfOneSurfaceAreMeshedAsTheOutlineOfTheirUnion) {
     EXPECT_NEAR(total_leaf_area(*h), disc_area, 1e-12);
     EXPECT_TRUE(check_invariants(*h).empty()) << describe(check_invariants(*h));
   }
+}
+
+// Contact lines (docs/hierarchy.md, "Contact lines"): a wall standing on a floor's inside, from (1.3, 0, 0.5) to
+// (1.3, 0, 2.5) (one-sided, facing -x), and a post crossing the floor (from y = -0.5 to 1) around (2.55, 0, 2.05)
+// cut the floor: no leaf of the floor has corners on both sides of either. The floor's patches are a 4 x 4 grid
+// of 0.75 squares (2 x 2 elements each), so the wall runs through patch interiors and ends inside them. The mesh
+// stays sound, the floor keeps its area, and the patches the lines do not reach keep their grid.
+TEST(Hierarchy, ContactLinesCutTheSurfaceTheyMeet) {
+  Scene scene;
+  scene.name = "contact";
+  const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  scene.add_face(scene.add_group("floor"), grey, {{0, 0, 0}, {0, 0, 3}, {3, 0, 3}, {3, 0, 0}});
+  scene.add_face(scene.add_group("wall"), grey, {{1.3, 0, 0.5}, {1.3, 0, 2.5}, {1.3, 1, 2.5}, {1.3, 1, 0.5}});
+  const std::uint32_t post = scene.add_group("post");
+  const std::vector<Vec2> square{{2.5, 2.0}, {2.6, 2.0}, {2.6, 2.1}, {2.5, 2.1}};
+  for (std::size_t k = 0; k < square.size(); ++k) {
+    const Vec2 a = square[k], b = square[(k + 1) % square.size()];
+    scene.add_face(post, grey, {{a.x, -0.5, a.y}, {b.x, -0.5, b.y}, {b.x, 1.0, b.y}, {a.x, 1.0, a.y}});
+  }
+  scene.build_surfaces();
+  const std::vector<std::vector<ContactSegment>> contacts = find_contact_lines(scene, scene.diagonal());
+  ASSERT_EQ(contacts[0].size(), 5u);  // the wall's foot and the post's four sides, on the floor
+  const Hierarchy h(scene, sizes(0.75, 0.375));
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  double floor_area = 0.0;
+  std::size_t grid_patches = 0;
+  std::vector<Vec3> corners;
+  for (const NodeId patch : h.patches()) {
+    if (h.surface(patch) != 0) continue;
+    if (h.corner_count(patch) == 4) ++grid_patches;
+    for (const NodeId leaf : h.leaves_under(patch)) {
+      floor_area += h.area(leaf);
+      h.corners(leaf, corners);
+      // Sides of the wall's foot (x = 1.3, z in [0.5, 2.5]) and of the post's square, among corners in their reach.
+      bool left = false, right = false, in = false, out = false;
+      for (const Vec3& p : corners) {
+        if (p.z > 0.5 + 1e-9 && p.z < 2.5 - 1e-9) {
+          left = left || p.x < 1.3 - 1e-9;
+          right = right || p.x > 1.3 + 1e-9;
+        }
+        const bool inside = p.x > 2.5 + 1e-9 && p.x < 2.6 - 1e-9 && p.z > 2.0 + 1e-9 && p.z < 2.1 - 1e-9;
+        const bool outside = p.x < 2.5 - 1e-9 || p.x > 2.6 + 1e-9 || p.z < 2.0 - 1e-9 || p.z > 2.1 + 1e-9;
+        in = in || inside;
+        out = out || outside;
+      }
+      EXPECT_FALSE(left && right) << "a floor leaf straddles the wall's foot at " << h.centroid(leaf).x << ", "
+                                  << h.centroid(leaf).z;
+      EXPECT_FALSE(in && out) << "a floor leaf straddles the post at " << h.centroid(leaf).x << ", "
+                              << h.centroid(leaf).z;
+    }
+  }
+  EXPECT_NEAR(floor_area, 9.0, 1e-12);
+  // Of the 16 grid patches, the wall's foot crosses the four of column x in [0.75, 1.5] and the post one.
+  EXPECT_EQ(grid_patches, 11u);
+  // Without contacts the floor is the plain grid.
+  EXPECT_EQ(find_contact_lines(faces_scene({{{0, 0}, {3, 0}, {3, 3}, {0, 3}}}), 3.0)[0].size(), 0u);
 }
 
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
