@@ -507,10 +507,26 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
     Vec2 a, b;
     Vec3 a3, b3;
   };
+  // Segment ends within `weld` of an earlier end are that end: the chords of two faces across the plane meet where
+  // the faces share an edge, each computed from its own face, a rounding apart (kept apart, they made a sliver).
+  std::map<std::pair<double, double>, std::vector<std::pair<Vec2, Vec3>>> cells;  // kept ends by cell of side weld
+  const auto welded = [&](const Vec2& p, const Vec3& p3) -> std::pair<Vec2, Vec3> {
+    const double cx = std::floor(p.x / weld), cy = std::floor(p.y / weld);
+    for (double i = cx - 1.0; i <= cx + 1.0; i += 1.0)
+      for (double j = cy - 1.0; j <= cy + 1.0; j += 1.0) {
+        const auto cell = cells.find({i, j});
+        if (cell == cells.end()) continue;
+        for (const auto& kept : cell->second)
+          if (glm::length(p - kept.first) <= weld) return kept;
+      }
+    cells[{cx, cy}].emplace_back(p, p3);
+    return {p, p3};
+  };
   std::vector<Segment> segments;
   for (const ContactSegment& c : contacts) {
-    const Vec2 a = frame.to_2d(c.a), b = frame.to_2d(c.b);
-    if (glm::length(b - a) > weld) segments.push_back({a, b, c.a, c.b});
+    const auto [a, a3] = welded(frame.to_2d(c.a), c.a);
+    const auto [b, b3] = welded(frame.to_2d(c.b), c.b);
+    if (glm::length(b - a) > weld) segments.push_back({a, b, a3, b3});
   }
   // Per patch: its corners in 2D and the points of its elements.
   const std::size_t patches = out.patches.size();

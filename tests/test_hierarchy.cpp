@@ -18,6 +18,8 @@
 #include <limits>
 #include <memory>
 #include <set>
+#include <random>
+#include <array>
 #include <string>
 #include <tuple>
 
@@ -347,6 +349,55 @@ TEST(Hierarchy, ContactLinesCutTheSurfaceTheyMeet) {
   EXPECT_EQ(grid_patches, 11u);
   // Without contacts the floor is the plain grid.
   EXPECT_EQ(find_contact_lines(faces_scene({{{0, 0}, {3, 0}, {3, 3}, {0, 3}}}), 3.0)[0].size(), 0u);
+}
+
+// Random boxes and partitions standing on, or sunk through, a floor meshed as a grid and as a Delaunay mesh (the
+// floor with a hole): the cut mesh stays sound and keeps the floor's area, whatever the lines' angles and ends.
+TEST(Hierarchy, RandomContactLinesKeepTheMeshSound) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 60; ++trial) {
+    Scene scene;
+    scene.name = "contacts";
+    const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+    const std::uint32_t floor = scene.add_group("floor");
+    const bool holed = trial % 2 == 1;
+    if (holed) {  // the floor around a hole [1.8, 2.2]^2, as four quads: the Delaunay mesher's case
+      scene.add_face(floor, grey, {{0, 0, 0}, {0, 0, 1.8}, {4, 0, 1.8}, {4, 0, 0}});
+      scene.add_face(floor, grey, {{0, 0, 2.2}, {0, 0, 4}, {4, 0, 4}, {4, 0, 2.2}});
+      scene.add_face(floor, grey, {{0, 0, 1.8}, {0, 0, 2.2}, {1.8, 0, 2.2}, {1.8, 0, 1.8}});
+      scene.add_face(floor, grey, {{2.2, 0, 1.8}, {2.2, 0, 2.2}, {4, 0, 2.2}, {4, 0, 1.8}});
+    } else {
+      scene.add_face(floor, grey, {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}});
+    }
+    for (int k = 0; k < 3; ++k) {
+      const double x = 0.3 + 3.4 * unit(random), z = 0.3 + 3.4 * unit(random), angle = 6.3 * unit(random);
+      const double half = 0.05 + 0.6 * unit(random), bottom = k == 2 ? -0.3 : 0.0;
+      const Vec3 along(std::cos(angle), 0.0, std::sin(angle)), across(-along.z, 0.0, along.x);
+      const Vec3 centre(x, 0.0, z);
+      const std::uint32_t group = scene.add_group("thing" + std::to_string(k));
+      if (k == 0) {  // a partition, one face, possibly reaching past the floor's edge or into the hole
+        const Vec3 a = centre - half * along, b = centre + half * along;
+        scene.add_face(group, grey, {a, b, b + Vec3(0, 1, 0), a + Vec3(0, 1, 0)});
+        continue;
+      }
+      const double width = 0.05 + 0.3 * unit(random);
+      const std::array<Vec3, 4> foot{centre - half * along - width * across, centre + half * along - width * across,
+                                     centre + half * along + width * across, centre - half * along + width * across};
+      for (std::size_t i = 0; i < 4; ++i) {
+        const Vec3 a = foot[i] + Vec3(0, bottom, 0), b = foot[(i + 1) % 4] + Vec3(0, bottom, 0);
+        scene.add_face(group, grey, {a, b, b + Vec3(0, 1, 0), a + Vec3(0, 1, 0)});
+      }
+    }
+    scene.build_surfaces();
+    const Hierarchy h(scene, sizes(0.5, 0.25));
+    const auto violations = check_invariants(h);
+    EXPECT_TRUE(violations.empty()) << "trial " << trial << ": " << describe(violations);
+    double floor_area = 0.0;
+    for (const NodeId leaf : h.leaves())
+      if (h.surface(leaf) == 0) floor_area += h.area(leaf);
+    EXPECT_NEAR(floor_area, holed ? 16.0 - 0.16 : 16.0, 1e-9) << "trial " << trial;
+  }
 }
 
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
