@@ -7,7 +7,8 @@
 // many surfaces (BM_BuildTerrain) and of a tessellated ball (BM_BuildSurfacesBall), and the check for faces lying
 // on one another in a scene of many coplanar surfaces (BM_CoplanarOverlapsCubes) and in the shapes it was once
 // quadratic on (BM_CoplanarOverlapsDecals, BM_CoplanarOverlapsPlanks); meshing and checking a floor with many
-// holes (BM_FloorWithHoles).
+// holes (BM_FloorWithHoles); meshing a floor cut along the feet of many posts standing on it
+// (BM_FloorWithStandingPosts).
 #include "core/builtin_scenes.h"
 #include "mesh/hierarchy.h"
 #include "mesh/invariants.h"
@@ -179,6 +180,53 @@ void BM_FloorWithHoles(benchmark::State& state) {
 }
 
 BENCHMARK(BM_FloorWithHoles)->Arg(16)->Arg(32)->Arg(64)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// An n x n floor (one quad) with a post standing on each unit cell: four side faces round a square foot of side
+// 0.3 turned by an angle that varies from post to post, each post its own group. The floor is cut along the 4 n^2
+// sides' feet (docs/hierarchy.md, "Contact lines"); with a patch per cell, every patch of the floor is cut, so the
+// cut region is the whole floor, with as many points as posts. Reported: the initial meshing (the Hierarchy's
+// constructor), thread CPU time per face of the scene, and the floor's leaves; the invariant checker runs after
+// each meshing, untimed.
+void BM_FloorWithStandingPosts(benchmark::State& state) {
+  const auto n = static_cast<int>(state.range(0));
+  aarad::Scene scene;
+  scene.name = "floor with posts";
+  const std::uint32_t grey = scene.add_material(aarad::Material{"grey", aarad::Rgb(0.5), aarad::Rgb(0.0)});
+  scene.add_face(scene.add_group("floor"), grey, {Vec3(0, 0, 0), Vec3(0, 0, n), Vec3(n, 0, n), Vec3(n, 0, 0)});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t group = scene.add_group("post_" + std::to_string(i) + "_" + std::to_string(j));
+      const double angle = 0.37 * (i + n * j);
+      const Vec3 centre(i + 0.5, 0.0, j + 0.5), along(0.15 * std::cos(angle), 0.0, 0.15 * std::sin(angle));
+      const Vec3 across(-along.z, 0.0, along.x);
+      const Vec3 foot[4] = {centre - along - across, centre + along - across, centre + along + across,
+                            centre - along + across};
+      for (int k = 0; k < 4; ++k) {
+        const Vec3 a = foot[k], b = foot[(k + 1) % 4];
+        scene.add_face(group, grey, {a, b, b + Vec3(0, 1, 0), a + Vec3(0, 1, 0)});
+      }
+    }
+  scene.build_surfaces();
+  aarad::mesh::MeshingOptions options;  // a patch per post, 2 x 2 elements: the cut region has 4 n^2 + 4 n + 1 points
+  options.patch_size = 1.0;
+  options.element_size = 0.5;
+  double meshing_seconds = 0.0;
+  std::size_t floor_leaves = 0;
+  for (auto _ : state) {
+    const double t0 = thread_seconds();
+    const Hierarchy h(scene, options);
+    meshing_seconds += thread_seconds() - t0;
+    floor_leaves = 0;
+    for (const NodeId leaf : h.leaves()) floor_leaves += h.surface(leaf) == 0 ? 1 : 0;
+    if (!aarad::mesh::check_invariants(h).empty()) state.SkipWithError("the cut floor breaks an invariant");
+  }
+  const double faces = static_cast<double>(scene.faces.size()), runs = static_cast<double>(state.iterations());
+  state.counters["faces"] = faces;
+  state.counters["floor_leaves"] = static_cast<double>(floor_leaves);
+  state.counters["meshing_us_per_face"] = 1e6 * meshing_seconds / runs / faces;
+}
+
+BENCHMARK(BM_FloorWithStandingPosts)->Arg(16)->Arg(32)->Arg(64)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // A ball: a unit sphere about the origin tessellated into n rings of 2n quads, each cut into two triangles (one
 // at the poles), one group and one smoothing group: 4 n^2 - 2 n faces, each in a plane of its own, every plane at

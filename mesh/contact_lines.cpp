@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
 
 namespace aarad::mesh {
 namespace {
@@ -28,10 +29,20 @@ Box box_of(const std::vector<Vec3>& points, double grow, std::uint32_t info) {
   return Box(lo, hi, info);
 }
 
-// The segments where `face` meets `plane` (contact_lines.h), appended to `out`.
-void meet_plane(const std::vector<Vec3>& face, const Plane& plane, double tolerance, std::vector<ContactSegment>& out) {
+// An edge whichever way round: its ends' coordinates, the smaller end first.
+using EdgeKey = std::array<double, 6>;
+EdgeKey edge_key(const Vec3& p, const Vec3& q) {
+  const std::array<double, 3> a{p.x, p.y, p.z}, b{q.x, q.y, q.z};
+  return a < b ? EdgeKey{a[0], a[1], a[2], b[0], b[1], b[2]} : EdgeKey{b[0], b[1], b[2], a[0], a[1], a[2]};
+}
+
+// The segments where `face` meets `plane` (contact_lines.h), appended to `out`. An edge in the plane for which
+// `own(a, b)` holds (an edge of the surface itself, which a neighbouring surface shares) is left out.
+template <class Own>
+void meet_plane(const std::vector<Vec3>& face, const Plane& plane, double tolerance, Own&& own,
+                std::vector<ContactSegment>& out) {
   const std::size_t n = face.size();
-  std::array<double, 64> small{};
+  std::array<double, 64> small;
   std::vector<double> large;
   double* distance = small.data();
   if (n > small.size()) {
@@ -49,24 +60,32 @@ void meet_plane(const std::vector<Vec3>& face, const Plane& plane, double tolera
   if (!(above && below)) {  // on one side: its edges that lie in the plane
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t j = (i + 1) % n;
-      if (on(i) && on(j)) out.push_back({onto(i), onto(j)});
+      if (on(i) && on(j) && !own(face[i], face[j])) out.push_back({onto(i), onto(j)});
     }
     return;
   }
-  // Across the plane: the points where the outline meets it.
-  std::vector<Vec3> points;
+  // Across the plane: the points where the outline meets it (at most n).
+  std::array<Vec3, 16> few;
+  std::vector<Vec3> many;
+  std::span<Vec3> room(few);
+  if (n > few.size()) {
+    many.resize(n);
+    room = many;
+  }
+  std::size_t found = 0;
   bool vertex_on_plane = false;
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t j = (i + 1) % n;
     if (on(i)) {
       vertex_on_plane = true;
-      points.push_back(onto(i));
+      room[found++] = onto(i);
     } else if (!on(j) && (distance[i] > 0.0) != (distance[j] > 0.0)) {
       const double t = distance[i] / (distance[i] - distance[j]);
       const Vec3 p = face[i] + t * (face[j] - face[i]);
-      points.push_back(p - plane.signed_distance(p) * plane.normal);
+      room[found++] = p - plane.signed_distance(p) * plane.normal;
     }
   }
+  const std::span<Vec3> points = room.first(found);
   if (points.size() == 2) {
     out.push_back({points[0], points[1]});
     return;
@@ -96,6 +115,30 @@ std::vector<std::vector<ContactSegment>> find_contact_lines(const Scene& scene, 
   face_boxes.reserve(scene.faces.size());
   for (std::uint32_t f = 0; f < scene.faces.size(); ++f)
     if (!scene.faces[f].vertices.empty()) face_boxes.push_back(box_of(scene.faces[f].vertices, 0.0, f));
+  // Each surface's outline edges (its face edges that no other face of it shares), sorted, made when the surface
+  // first meets an edge in its plane: neighbouring surfaces share them (the walls of a room, the triangles of a
+  // terrain), and a contact along one cuts nothing. An edge two of its faces share is inside the surface, which
+  // the meshing does not follow (docs/hierarchy.md): a surface standing there is a contact line like any other.
+  std::vector<std::vector<EdgeKey>> edges_of(scene.surfaces.size());
+  const auto own_edges = [&](std::uint32_t s) -> const std::vector<EdgeKey>& {
+    std::vector<EdgeKey>& edges = edges_of[s];
+    if (edges.empty()) {
+      for (const std::uint32_t f : scene.surfaces[s].faces) {
+        const std::vector<Vec3>& v = scene.faces[f].vertices;
+        for (std::size_t i = 0; i < v.size(); ++i) edges.push_back(edge_key(v[i], v[(i + 1) % v.size()]));
+      }
+      std::sort(edges.begin(), edges.end());
+      std::vector<EdgeKey> once;
+      for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j - i == 1) once.push_back(edges[i]);
+        i = j;
+      }
+      edges = std::move(once);
+    }
+    return edges;
+  };
   CGAL::box_intersection_d(surface_boxes.begin(), surface_boxes.end(), face_boxes.begin(), face_boxes.end(),
                            [&](const Box& surface_box, const Box& face_box) {
                              const std::uint32_t s = surface_box.info();
@@ -104,14 +147,13 @@ std::vector<std::vector<ContactSegment>> find_contact_lines(const Scene& scene, 
                              const Plane& plane = scene.surfaces[s].plane;
                              const Vec3& normal = scene.surfaces[face.surface].plane.normal;
                              if (1.0 - std::abs(glm::dot(normal, plane.normal)) < kParallel) return;
-                             meet_plane(face.vertices, plane, tolerance, contacts[s]);
+                             const auto own = [&](const Vec3& a, const Vec3& b) {
+                               return std::binary_search(own_edges(s).begin(), own_edges(s).end(), edge_key(a, b));
+                             };
+                             meet_plane(face.vertices, plane, tolerance, own, contacts[s]);
                            });
   // One segment per line piece, in a fixed order (the boxes' callbacks come in no documented order).
-  using Key = std::array<double, 6>;
-  const auto key = [](const ContactSegment& c) {
-    const std::array<double, 3> a{c.a.x, c.a.y, c.a.z}, b{c.b.x, c.b.y, c.b.z};
-    return a < b ? Key{a[0], a[1], a[2], b[0], b[1], b[2]} : Key{b[0], b[1], b[2], a[0], a[1], a[2]};
-  };
+  const auto key = [](const ContactSegment& c) { return edge_key(c.a, c.b); };
   for (std::vector<ContactSegment>& list : contacts) {
     std::erase_if(list, [](const ContactSegment& c) { return c.a == c.b; });
     std::sort(list.begin(), list.end(),

@@ -26,7 +26,9 @@ struct ContactSegment {
 //   plane in more than two points gives the chords between consecutive crossings, and none when one of its
 //   vertices lies on the plane (the pairing is then ambiguous).
 // Faces of the surface's own plane (its own faces, coplanar surfaces and surfaces facing it from the same plane)
-// give none. Segments may lie on the surface's outline or outside it: the meshing keeps what crosses its inside.
+// give none, nor do the surface's own outline edges (edges of its faces that no other of its faces shares), which
+// neighbours share. Other segments may lie on the surface's outline or outside it: the meshing keeps what crosses
+// its inside.
 // Repeated segments (an edge of two faces) are listed once. Candidates are found by intersecting boxes (CGAL's
 // box_intersection_d), so the cost follows the number of faces near each surface, not surfaces x faces.
 std::vector<std::vector<ContactSegment>> find_contact_lines(const Scene& scene, double diagonal);

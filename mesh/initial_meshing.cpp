@@ -299,6 +299,32 @@ Vec3 onto_plane(const Vec3& p, const Plane& plane, double slack) {
   return std::abs(distance) > slack ? p - distance * plane.normal : p;
 }
 
+// Points of a plane within `weld` of an earlier point are that point: the first of a cluster is kept, with what
+// came with it (a 3D position, say). Kept points are found through cells of side `weld`, so n points cost n
+// lookups of nine cells.
+template <class Payload>
+class Welder {
+ public:
+  explicit Welder(double weld) : weld_(weld) {}
+  // The kept point within `weld` of p and its payload, or p with `payload`, kept from now on.
+  std::pair<Vec2, Payload> operator()(const Vec2& p, const Payload& payload) {
+    const double cx = std::floor(p.x / weld_), cy = std::floor(p.y / weld_);
+    for (double i = cx - 1.0; i <= cx + 1.0; i += 1.0)
+      for (double j = cy - 1.0; j <= cy + 1.0; j += 1.0) {
+        const auto cell = cells_.find({i, j});
+        if (cell == cells_.end()) continue;
+        for (const auto& kept : cell->second)
+          if (glm::dot(p - kept.first, p - kept.first) <= weld_ * weld_) return kept;
+      }
+    cells_[{cx, cy}].emplace_back(p, payload);
+    return {p, payload};
+  }
+
+ private:
+  double weld_;
+  std::map<std::pair<double, double>, std::vector<std::pair<Vec2, Payload>>> cells_;
+};
+
 // Any other surface: constrained Delaunay mesh of the union of its faces (shared edges and T-junctions
 // between its faces become shared triangulation vertices, so the result conforms), then elements.
 // Per point, 1 when it lies in one of the polygons (contains). Trying every polygon for every point was quadratic
@@ -359,25 +385,13 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   // (the first of a cluster, in face order, is kept, with its 3D position), and below, an edge passing within
   // `weld` of another vertex is split there.
   const double weld = kPlaneDistance * budget.diagonal;
-  std::map<std::pair<double, double>, std::vector<Vec2>> cells;  // kept vertices by cell of side `weld`
-  const auto welded = [&](const Vec2& p) {
-    const double cx = std::floor(p.x / weld), cy = std::floor(p.y / weld);
-    for (double i = cx - 1.0; i <= cx + 1.0; i += 1.0)
-      for (double j = cy - 1.0; j <= cy + 1.0; j += 1.0) {
-        const auto cell = cells.find({i, j});
-        if (cell == cells.end()) continue;
-        for (const Vec2& q : cell->second)
-          if (glm::dot(p - q, p - q) <= weld * weld) return q;
-      }
-    cells[{cx, cy}].push_back(p);
-    return p;
-  };
+  Welder<bool> welded(weld);
   std::vector<Vec2> vertices;  // every face's vertices, sorted by x (with repeats)
   for (const std::uint32_t fi : surface.faces) {
     const Face& face = scene.faces[fi];
     std::vector<Vec2> polygon;
     for (const Vec3& v : face.vertices) {
-      polygon.push_back(welded(frame.to_2d(v)));
+      polygon.push_back(welded(frame.to_2d(v), true).first);
       original.emplace(std::make_pair(polygon.back().x, polygon.back().y), onto_plane(v, surface.plane, slack));
       vertices.push_back(polygon.back());
     }
@@ -484,17 +498,17 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
   return out;
 }
 
-
 // Cuts the meshing along the contact lines of the surface (mesh/contact_lines.h; docs/hierarchy.md, "Contact
 // lines"): a patch that a contact segment crosses, or whose outline a segment ends on, is no longer a shooter whose
 // one point stands for both sides of the line. The patches so touched (the region) are triangulated again, as one
 // constrained Delaunay triangulation (CGAL) of
 // - the region's outline: the element edges of its patches that no other patch of the region shares, with every
 //   point on them, so the patches around the region keep their element edges and the mesh stays conforming;
-// - the element corners inside the region, as plain points, except those within a quarter of an element's size of
-//   a contact segment (they would make slivers along it);
-// - the contact segments, as constraints, ends within `weld` of a region point taken as that point and cut at the
-//   outline points they pass within `weld` of (where they cross the surface's own outline, CGAL puts the crossing).
+// - the element corners inside the region, as plain points, except those within half an element's size of a
+//   contact segment (they would make slivers along it);
+// - the contact segments, as constraints: ends within `weld` of an outline point taken as that point, ends within
+//   `weld` of an outline edge and crossings of the outline put on that edge, and cut at the outline points they
+//   pass within `weld` of, so that no two constraints cross on the outline.
 // No Delaunay refinement: it would split the outline's edges, which the patches around the region share. Every
 // triangle inside the region becomes a patch of one element. Patches the segments do not touch keep their bits.
 void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& plane,
@@ -509,34 +523,27 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
   };
   // Segment ends within `weld` of an earlier end are that end: the chords of two faces across the plane meet where
   // the faces share an edge, each computed from its own face, a rounding apart (kept apart, they made a sliver).
-  std::map<std::pair<double, double>, std::vector<std::pair<Vec2, Vec3>>> cells;  // kept ends by cell of side weld
-  const auto welded = [&](const Vec2& p, const Vec3& p3) -> std::pair<Vec2, Vec3> {
-    const double cx = std::floor(p.x / weld), cy = std::floor(p.y / weld);
-    for (double i = cx - 1.0; i <= cx + 1.0; i += 1.0)
-      for (double j = cy - 1.0; j <= cy + 1.0; j += 1.0) {
-        const auto cell = cells.find({i, j});
-        if (cell == cells.end()) continue;
-        for (const auto& kept : cell->second)
-          if (glm::length(p - kept.first) <= weld) return kept;
-      }
-    cells[{cx, cy}].emplace_back(p, p3);
-    return {p, p3};
-  };
+  Welder<Vec3> welded(weld);
   std::vector<Segment> segments;
   for (const ContactSegment& c : contacts) {
     const auto [a, a3] = welded(frame.to_2d(c.a), c.a);
     const auto [b, b3] = welded(frame.to_2d(c.b), c.b);
     if (glm::length(b - a) > weld) segments.push_back({a, b, a3, b3});
   }
-  // Per patch: its corners in 2D and the points of its elements.
+  // Per patch, the points of its elements, each once; made when first asked for (most surfaces meet their contact
+  // lines only along their outline, and ask for none).
   const std::size_t patches = out.patches.size();
-  std::vector<std::vector<int>> element_points(patches);
-  for (std::size_t p = 0; p < patches; ++p) {
-    for (const CornerIndices& e : out.elements[p])
-      for (int k = 0; k < count(e); ++k) element_points[p].push_back(e[static_cast<std::size_t>(k)]);
-    std::sort(element_points[p].begin(), element_points[p].end());
-    element_points[p].erase(std::unique(element_points[p].begin(), element_points[p].end()), element_points[p].end());
-  }
+  std::vector<std::vector<int>> element_points_of(patches);
+  const auto element_points = [&](std::size_t p) -> const std::vector<int>& {
+    std::vector<int>& points = element_points_of[p];
+    if (points.empty()) {
+      for (const CornerIndices& e : out.elements[p])
+        for (int k = 0; k < count(e); ++k) points.push_back(e[static_cast<std::size_t>(k)]);
+      std::sort(points.begin(), points.end());
+      points.erase(std::unique(points.begin(), points.end()), points.end());
+    }
+    return points;
+  };
   // Distance from x to the line of the directed edge (c, d), positive on its left (inside a counter-clockwise patch).
   const auto inside_distance = [](const Vec2& c, const Vec2& d, const Vec2& x) {
     const Vec2 e = d - c;
@@ -571,37 +578,49 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
     for (const Vec2& end : {s.a, s.b}) {
       if (depth(end) < -weld) continue;
       bool known = false;
-      for (const int q : element_points[p]) known = known || glm::length(at[static_cast<std::size_t>(q)] - end) <= weld;
+      for (const int q : element_points(p)) known = known || glm::length(at[static_cast<std::size_t>(q)] - end) <= weld;
       if (!known) return true;
     }
     return false;
   };
+  // Pairs whose boxes meet, sorted (CGAL's box_intersection_d reports them in no documented order): every search
+  // below is by boxes, so a surface with many contact lines costs what each line's neighbourhood costs.
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 2, std::uint32_t>;
-  std::vector<Box> patch_boxes, segment_boxes;
+  const auto box = [](Vec2 low, Vec2 high, double grow, std::uint32_t info) {
+    double lo[2] = {low.x - grow, low.y - grow}, hi[2] = {high.x + grow, high.y + grow};
+    return Box(lo, hi, info);
+  };
+  const auto meeting = [](std::vector<Box>& first, std::vector<Box>& second) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    CGAL::box_intersection_d(first.begin(), first.end(), second.begin(), second.end(),
+                             [&](const Box& a, const Box& b) { pairs.emplace_back(a.info(), b.info()); });
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+  };
+  // The segments' boxes grown by `grow`, those of the used ones only when `only_used` is given.
+  const auto segment_boxes = [&](double grow, const std::vector<std::uint8_t>* only_used) {
+    std::vector<Box> boxes;
+    for (std::uint32_t i = 0; i < segments.size(); ++i)
+      if (only_used == nullptr || (*only_used)[i] != 0)
+        boxes.push_back(box(glm::min(segments[i].a, segments[i].b), glm::max(segments[i].a, segments[i].b), grow, i));
+    return boxes;
+  };
+  std::vector<Box> patch_boxes, all_segments = segment_boxes(0.0, nullptr);
   for (std::uint32_t p = 0; p < patches; ++p) {
     Vec2 low = at[static_cast<std::size_t>(out.patches[p][0])], high = low;
     for (int k = 1; k < count(out.patches[p]); ++k) {
       low = glm::min(low, at[static_cast<std::size_t>(out.patches[p][static_cast<std::size_t>(k)])]);
       high = glm::max(high, at[static_cast<std::size_t>(out.patches[p][static_cast<std::size_t>(k)])]);
     }
-    double lo[2] = {low.x - weld, low.y - weld}, hi[2] = {high.x + weld, high.y + weld};
-    patch_boxes.emplace_back(lo, hi, p);
-  }
-  for (std::uint32_t i = 0; i < segments.size(); ++i) {
-    const Vec2 low = glm::min(segments[i].a, segments[i].b), high = glm::max(segments[i].a, segments[i].b);
-    double lo[2] = {low.x, low.y}, hi[2] = {high.x, high.y};
-    segment_boxes.emplace_back(lo, hi, i);
+    patch_boxes.push_back(box(low, high, weld, p));
   }
   // The segments that cross a patch cut it, and every patch their ends touch. A segment along the outline, or
   // outside the surface, cuts nothing, wherever its ends lie.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> meeting;  // (patch, segment) whose boxes meet
-  CGAL::box_intersection_d(
-      patch_boxes.begin(), patch_boxes.end(), segment_boxes.begin(), segment_boxes.end(),
-      [&](const Box& patch, const Box& segment) { meeting.emplace_back(patch.info(), segment.info()); });
+  const auto patch_segment = meeting(patch_boxes, all_segments);
   std::vector<std::uint8_t> cut(patches, 0), used(segments.size(), 0);
-  for (const auto& [patch, segment] : meeting)
+  for (const auto& [patch, segment] : patch_segment)
     if (touches(segments[segment], patch, false)) used[segment] = 1;
-  for (const auto& [patch, segment] : meeting)
+  for (const auto& [patch, segment] : patch_segment)
     if (used[segment] != 0 && touches(segments[segment], patch, true)) cut[patch] = 1;
   if (std::find(cut.begin(), cut.end(), 1) == cut.end()) return;
 
@@ -625,13 +644,9 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
   }
   // Region points by 2D position: the outline's (kept whatever the segments) and the inside ones.
   std::map<std::pair<double, double>, int> index_of;
-  std::vector<int> outline_points;
-  for (const auto& [ends, n] : edges) {
+  for (const auto& [ends, n] : edges)
     for (const int v : {ends.first, ends.second})
-      if (index_of.emplace(std::make_pair(at[static_cast<std::size_t>(v)].x, at[static_cast<std::size_t>(v)].y), v)
-              .second)
-        outline_points.push_back(v);
-  }
+      index_of.emplace(std::make_pair(at[static_cast<std::size_t>(v)].x, at[static_cast<std::size_t>(v)].y), v);
   // Distance from x to segment s.
   const auto distance = [](const Segment& s, const Vec2& x) {
     const Vec2 d = s.b - s.a;
@@ -639,19 +654,34 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
     return glm::length(x - (s.a + t * d));
   };
   const double clear = std::max(2.0 * weld, 0.5 * std::sqrt(element_area / static_cast<double>(element_count)));
-  std::vector<int> inside_points;
+  std::vector<int> inside_points;  // in the order of the patches and their elements
+  std::vector<std::uint8_t> listed(out.points.size(), 0);
   for (std::size_t p = 0; p < patches; ++p) {
     if (cut[p] == 0) continue;
-    for (const int v : element_points[p]) {
+    for (const int v : element_points(p)) {
       const Vec2& x = at[static_cast<std::size_t>(v)];
-      if (index_of.count({x.x, x.y}) != 0) continue;
-      bool near = false;
-      for (std::size_t i = 0; i < segments.size() && !near; ++i)
-        near = used[i] != 0 && distance(segments[i], x) <= clear;
-      if (near) continue;
-      index_of.emplace(std::make_pair(x.x, x.y), v);
+      if (listed[static_cast<std::size_t>(v)] != 0 || index_of.count({x.x, x.y}) != 0) continue;
+      listed[static_cast<std::size_t>(v)] = 1;
       inside_points.push_back(v);
     }
+  }
+  {
+    std::vector<Box> point_boxes, near_segments = segment_boxes(clear, &used);
+    for (std::uint32_t k = 0; k < inside_points.size(); ++k) {
+      const Vec2& x = at[static_cast<std::size_t>(inside_points[k])];
+      point_boxes.push_back(box(x, x, 0.0, k));
+    }
+    std::vector<std::uint8_t> near(inside_points.size(), 0);
+    for (const auto& [k, i] : meeting(point_boxes, near_segments))
+      if (distance(segments[i], at[static_cast<std::size_t>(inside_points[k])]) <= clear) near[k] = 1;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < inside_points.size(); ++k) {
+      if (near[k] != 0) continue;
+      const Vec2& x = at[static_cast<std::size_t>(inside_points[k])];
+      index_of.emplace(std::make_pair(x.x, x.y), inside_points[k]);
+      inside_points[kept++] = inside_points[k];
+    }
+    inside_points.resize(kept);
   }
 
   // The outline's pieces, and where the segments meet them: ends within `weld` of a piece are moved onto it, and
@@ -662,7 +692,19 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
     std::vector<std::pair<double, Vec2>> stops;  // parameter along a -> b, point
   };
   std::vector<Piece> pieces;
-  for (const auto& [ends, n] : edges) pieces.push_back({ends.first, ends.second, {}});
+  std::vector<Box> piece_boxes;
+  for (const auto& [ends, n] : edges) {
+    const Vec2 a = at[static_cast<std::size_t>(ends.first)], b = at[static_cast<std::size_t>(ends.second)];
+    piece_boxes.push_back(box(glm::min(a, b), glm::max(a, b), weld, static_cast<std::uint32_t>(pieces.size())));
+    pieces.push_back({ends.first, ends.second, {}});
+  }
+  // Per used segment, the pieces within `weld` of it (in the outline's order), and their ends.
+  std::vector<std::vector<std::uint32_t>> pieces_near(segments.size());
+  {
+    std::vector<Box> used_segments = segment_boxes(weld, &used);
+    for (const auto& [piece, segment] : meeting(piece_boxes, used_segments)) pieces_near[segment].push_back(piece);
+  }
+  std::vector<int> points_near;
   const auto cross = [](const Vec2& p, const Vec2& q) { return p.x * q.y - p.y * q.x; };
   std::map<std::pair<double, double>, Vec3> segment_ends;  // new points that are a segment's end, on the plane
   const double slack = plane_slack(out.points, 0.0);
@@ -672,16 +714,22 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
     const Segment& s = segments[i];
     const Vec2 d = s.b - s.a;
     std::vector<std::pair<double, Vec2>> stops;
+    // The outline points near the segment, each once, in the order the outline lists them.
+    points_near.clear();
+    for (const std::uint32_t k : pieces_near[i])
+      for (const int v : {pieces[k].a, pieces[k].b})
+        if (std::find(points_near.begin(), points_near.end(), v) == points_near.end()) points_near.push_back(v);
     for (const auto& [end, end3, t] : {std::tuple{s.a, s.a3, 0.0}, std::tuple{s.b, s.b3, 1.0}}) {
       Vec2 moved = end;
       bool placed = false;
-      for (const int v : outline_points)
+      for (const int v : points_near)
         if (!placed && glm::length(at[static_cast<std::size_t>(v)] - end) <= weld) {
           moved = at[static_cast<std::size_t>(v)];
           placed = true;
         }
-      for (Piece& piece : pieces) {
+      for (const std::uint32_t k : pieces_near[i]) {
         if (placed) break;
+        Piece& piece = pieces[k];
         const Vec2 a = at[static_cast<std::size_t>(piece.a)], e = at[static_cast<std::size_t>(piece.b)] - a;
         const double u = glm::dot(end - a, e) / glm::dot(e, e);
         if (!(u > 0.0 && u < 1.0) || glm::length(end - (a + u * e)) > weld) continue;
@@ -692,12 +740,13 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
       if (!placed) segment_ends.emplace(std::make_pair(end.x, end.y), onto_plane(end3, plane, slack));
       stops.emplace_back(t, moved);
     }
-    for (const int v : outline_points) {
+    for (const int v : points_near) {
       const Vec2& x = at[static_cast<std::size_t>(v)];
       const double t = glm::dot(x - s.a, d) / glm::dot(d, d);
       if (t > 0.0 && t < 1.0 && distance(s, x) <= weld) stops.emplace_back(t, x);
     }
-    for (Piece& piece : pieces) {
+    for (const std::uint32_t k : pieces_near[i]) {
+      Piece& piece = pieces[k];
       const Vec2 a = at[static_cast<std::size_t>(piece.a)], b = at[static_cast<std::size_t>(piece.b)], e = b - a;
       const double denominator = cross(d, e);
       if (denominator == 0.0) continue;
@@ -717,7 +766,8 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
       // A piece along the outline needs no cut: the outline is one already.
       const Vec2 middle = 0.5 * (from + to);
       bool along = false;
-      for (const Piece& piece : pieces) {
+      for (const std::uint32_t near : pieces_near[i]) {
+        const Piece& piece = pieces[near];
         const Segment edge{at[static_cast<std::size_t>(piece.a)], at[static_cast<std::size_t>(piece.b)], {}, {}};
         along = along || distance(edge, middle) <= weld;
       }

@@ -347,8 +347,47 @@ TEST(Hierarchy, ContactLinesCutTheSurfaceTheyMeet) {
   EXPECT_NEAR(floor_area, 9.0, 1e-12);
   // Of the 16 grid patches, the wall's foot crosses the four of column x in [0.75, 1.5] and the post one.
   EXPECT_EQ(grid_patches, 11u);
-  // Without contacts the floor is the plain grid.
-  EXPECT_EQ(find_contact_lines(faces_scene({{{0, 0}, {3, 0}, {3, 3}, {0, 3}}}), 3.0)[0].size(), 0u);
+  // A wall standing on the floor's outline, its ends between the outline's points, has a contact line there but
+  // cuts nothing: the floor stays the grid.
+  Scene edge;
+  edge.name = "edge";
+  const std::uint32_t white = edge.add_material(Material{"white", Rgb(0.5), Rgb(0.0)});
+  edge.add_face(edge.add_group("floor"), white, {{0, 0, 0}, {0, 0, 3}, {3, 0, 3}, {3, 0, 0}});
+  edge.add_face(edge.add_group("wall"), white, {{0, 0, 2.9}, {0, 0, 0.2}, {0, 1, 0.2}, {0, 1, 2.9}});
+  edge.build_surfaces();
+  ASSERT_EQ(find_contact_lines(edge, edge.diagonal())[0].size(), 1u);
+  const Hierarchy plain(edge, sizes(0.75, 0.375));
+  std::size_t floor_leaves = 0;
+  for (const NodeId leaf : plain.leaves()) {
+    if (plain.surface(leaf) != 0) continue;
+    ++floor_leaves;
+    EXPECT_EQ(plain.corner_count(leaf), 4);
+  }
+  EXPECT_EQ(floor_leaves, 64u);
+
+  // A wall standing on an edge two faces of the floor share, inside the floor (the meshing does not follow such an
+  // edge): a contact line like any other, so no floor leaf has corners on both sides of the diagonal.
+  Scene diagonal;
+  diagonal.name = "diagonal";
+  const std::uint32_t paint = diagonal.add_material(Material{"paint", Rgb(0.5), Rgb(0.0)});
+  const std::uint32_t halves = diagonal.add_group("floor");
+  diagonal.add_face(halves, paint, {{0, 0, 0}, {0, 0, 3}, {3, 0, 3}});
+  diagonal.add_face(halves, paint, {{0, 0, 0}, {3, 0, 3}, {3, 0, 0}});
+  diagonal.add_face(diagonal.add_group("wall"), paint, {{0, 0, 0}, {3, 0, 3}, {3, 1, 3}, {0, 1, 0}});
+  diagonal.build_surfaces();
+  const Hierarchy cut(diagonal, sizes(0.75, 0.375));
+  EXPECT_TRUE(check_invariants(cut).empty()) << describe(check_invariants(cut));
+  for (const NodeId leaf : cut.leaves()) {
+    if (cut.surface(leaf) != 0) continue;
+    cut.corners(leaf, corners);
+    bool above = false, below = false;
+    for (const Vec3& p : corners) {
+      above = above || p.x - p.z > 1e-9;
+      below = below || p.x - p.z < -1e-9;
+    }
+    EXPECT_FALSE(above && below) << "a floor leaf straddles the diagonal at " << cut.centroid(leaf).x << ", "
+                                 << cut.centroid(leaf).z;
+  }
 }
 
 // Random boxes and partitions standing on, or sunk through, a floor meshed as a grid and as a Delaunay mesh (the
