@@ -508,7 +508,9 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
 //   contact segment (they would make slivers along it);
 // - the contact segments, as constraints: ends within `weld` of an outline point taken as that point, ends within
 //   `weld` of an outline edge and crossings of the outline put on that edge, and cut at the outline points they
-//   pass within `weld` of, so that no two constraints cross on the outline.
+//   pass within `weld` of, so that no two constraints cross on the outline; inside the region, cut into equal
+//   pieces no longer than an element's size (the square root of the region's mean element area), which stand for
+//   the corners left out along them.
 // No Delaunay refinement: it would split the outline's edges, which the patches around the region share. Every
 // triangle inside the region becomes a patch of one element. Patches the segments do not touch keep their bits.
 void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& plane,
@@ -771,7 +773,17 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
         const Segment edge{at[static_cast<std::size_t>(piece.a)], at[static_cast<std::size_t>(piece.b)], {}, {}};
         along = along || distance(edge, middle) <= weld;
       }
-      if (!along) contact_pieces.emplace_back(from, to);
+      if (along) continue;
+      // Cut into pieces no longer than an element, so that the triangles along the line are element-sized: whole,
+      // the piece was one edge of a sliver reaching from one end of the line to the other (the element corners near
+      // it are left out), whose centroid then shot to the line's far end seen edge on (docs/hierarchy.md).
+      const auto parts = static_cast<int>(std::ceil(glm::length(to - from) / (2.0 * clear)));
+      Vec2 start = from;
+      for (int k = 1; k <= parts; ++k) {
+        const Vec2 stop = k == parts ? to : from + (static_cast<double>(k) / parts) * (to - from);
+        contact_pieces.emplace_back(start, stop);
+        start = stop;
+      }
     }
   }
 

@@ -317,7 +317,7 @@ TEST(Hierarchy, ContactLinesCutTheSurfaceTheyMeet) {
   ASSERT_EQ(contacts[0].size(), 5u);  // the wall's foot and the post's four sides, on the floor
   const Hierarchy h(scene, sizes(0.75, 0.375));
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
-  double floor_area = 0.0;
+  double floor_area = 0.0, longest_on_foot = 0.0;
   std::size_t grid_patches = 0;
   std::vector<Vec3> corners;
   for (const NodeId patch : h.patches()) {
@@ -342,8 +342,18 @@ TEST(Hierarchy, ContactLinesCutTheSurfaceTheyMeet) {
                                   << h.centroid(leaf).z;
       EXPECT_FALSE(in && out) << "a floor leaf straddles the post at " << h.centroid(leaf).x << ", "
                               << h.centroid(leaf).z;
+      // Edges along the wall's foot are no longer than an element: the foot is cut into element-sized pieces, so
+      // the triangles along it are not slivers from one end of it to the other.
+      for (std::size_t k = 0; k < corners.size(); ++k) {
+        const Vec3& a = corners[k];
+        const Vec3& b = corners[(k + 1) % corners.size()];
+        if (std::abs(a.x - 1.3) < 1e-9 && std::abs(b.x - 1.3) < 1e-9)
+          longest_on_foot = std::max(longest_on_foot, glm::length(b - a));
+      }
     }
   }
+  EXPECT_GT(longest_on_foot, 0.0);
+  EXPECT_LE(longest_on_foot, 0.375 + 1e-9);  // 2.0 (the whole foot) before it was cut into pieces
   EXPECT_NEAR(floor_area, 9.0, 1e-12);
   // Of the 16 grid patches, the wall's foot crosses the four of column x in [0.75, 1.5] and the post one.
   EXPECT_EQ(grid_patches, 11u);

@@ -352,7 +352,8 @@ TEST(SolverFurnace, FromTheCentroidsTheNearFieldCorrectionKeepsJunctionsRight) {
 // inside of its floor, at x = 2, where the floor's patch centroids lie (docs/hierarchy.md, "Contact lines"). Before
 // the floor was cut along the partition's foot, a floor patch across it shot from a centroid a rounding in front of
 // the partition: elements at its foot got B = 71 (35x the exact value) with adaptive substructuring, and 35 % too much
-// without. What is left is the near field where the partition ends.
+// without. What is left lies along the partition's foot: the far walls' patches give its lowest elements too little,
+// seeing them in the same pixels as the floor in front of them (docs/hierarchy.md, "Contact lines").
 Scene partition_furnace() {
   Scene scene;
   scene.name = "partition-furnace";
@@ -377,11 +378,14 @@ TEST(SolverFurnace, APartitionStandingOnTheFloorsInsideIsLitRight) {
   options.converge = 1e-3;
   options.adaptive = false;
   const FurnaceFigures fixed = furnace_figures(options, partition_furnace());
-  EXPECT_LT(fixed.worst, 0.10);  // 0.077 measured; 0.345 before the cut
+  // 0.049 measured; 0.077 while the cut's triangles along the foot reached from one of its ends to the other; 0.345
+  // before the cut.
+  EXPECT_LT(fixed.worst, 0.06);
   EXPECT_LT(fixed.area_rms, 0.02);
   options.adaptive = true;
   const FurnaceFigures adaptive = furnace_figures(options, partition_furnace());
-  EXPECT_LT(adaptive.worst, 0.25);  // 0.212 measured, at the partition's ends; 70.6 before the cut
+  // 0.179 measured, at the partition's foot; 0.212 (at its ends) with the slivers along the foot; 70.6 before the cut.
+  EXPECT_LT(adaptive.worst, 0.20);
   EXPECT_LT(adaptive.area_rms, 0.02);
 }
 
