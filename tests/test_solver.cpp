@@ -352,8 +352,9 @@ TEST(SolverFurnace, FromTheCentroidsTheNearFieldCorrectionKeepsJunctionsRight) {
 // inside of its floor, at x = 2, where the floor's patch centroids lie (docs/hierarchy.md, "Contact lines"). Before
 // the floor was cut along the partition's foot, a floor patch across it shot from a centroid a rounding in front of
 // the partition: elements at its foot got B = 71 (35x the exact value) with adaptive substructuring, and 35 % too much
-// without. What is left lies along the partition's foot: the far walls' patches give its lowest elements too little,
-// seeing them in the same pixels as the floor in front of them (docs/hierarchy.md, "Contact lines").
+// without. What is left lies along the partition's foot: the far walls' patches give its lowest elements nothing,
+// seeing them in pixels where the floor's pieces on both sides of the foot share one depth key in front of it
+// (docs/hierarchy.md, "Contact lines").
 Scene partition_furnace() {
   Scene scene;
   scene.name = "partition-furnace";
