@@ -779,8 +779,8 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
       // it are left out), whose centroid then shot to the line's far end seen edge on (docs/hierarchy.md).
       const auto parts = static_cast<int>(std::ceil(glm::length(to - from) / (2.0 * clear)));
       Vec2 start = from;
-      for (int k = 1; k <= parts; ++k) {
-        const Vec2 stop = k == parts ? to : from + (static_cast<double>(k) / parts) * (to - from);
+      for (int part = 1; part <= parts; ++part) {
+        const Vec2 stop = part == parts ? to : from + (static_cast<double>(part) / parts) * (to - from);
         contact_pieces.emplace_back(start, stop);
         start = stop;
       }
