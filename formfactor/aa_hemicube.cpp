@@ -8,6 +8,33 @@
 #include <cmath>
 
 namespace aarad::formfactor {
+namespace {
+
+// The plane order of the coverage walk's overfilled layers (coverage_list.h, CoverageWalk): receiver `back` lies
+// behind receiver `front`'s plane, seen from the shooting point, when every corner of it is on the far side of that
+// plane or on it, and some corner strictly behind. "On" allows for the rounding of a corner computed on the plane
+// (the points where a floor is cut along a wall's foot): 1e-10 of the coordinates' and the plane offset's size.
+struct PlaneOrder {
+  static constexpr bool kActive = true;
+  const ReceiverView& receivers;
+  Vec3 eye;
+
+  bool operator()(std::uint32_t front, std::uint32_t back) const {
+    const Plane& plane = receivers.plane(front);
+    if (!(plane.signed_distance(eye) > 0.0)) return false;  // seen edge on: nothing lies behind it
+    bool strictly = false;
+    for (const Vec3& corner : receivers.polygon(back)) {
+      const double distance = plane.signed_distance(corner);
+      const double on = 1e-10 * (std::max({std::abs(corner.x), std::abs(corner.y), std::abs(corner.z)}) +
+                                 std::abs(plane.d));
+      if (distance > on) return false;
+      strictly = strictly || distance < -on;
+    }
+    return strictly;
+  }
+};
+
+}  // namespace
 
 AaHemicubeBackend::AaHemicubeBackend(int resolution) : geometry_(resolution) {
   tasks_ = face_tasks(geometry_.resolution());
@@ -143,22 +170,25 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
   std::uint32_t run_receiver = 0;
   double run_sum = 0.0;
-  arena.take_all([&](std::size_t pixel, std::uint32_t receiver, double visible) {
-    const double contribution = visible * weight[pixel];
-    if (receiver != run_receiver) {
-      sums[run_receiver] += run_sum;
-      run_receiver = receiver;
-      run_sum = contribution;
-    } else {
-      run_sum += contribution;
-    }
-  });
+  arena.take_all(
+      [&](std::size_t pixel, std::uint32_t receiver, double visible) {
+        const double contribution = visible * weight[pixel];
+        if (receiver != run_receiver) {
+          sums[run_receiver] += run_sum;
+          run_receiver = receiver;
+          run_sum = contribution;
+        } else {
+          run_sum += contribution;
+        }
+      },
+      PlaneOrder{receivers, eye_});
   if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 
 void AaHemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<double> out) {
   check_shot(shooter, receivers, subset, out);
+  eye_ = shooter.centre;
   prepared_.prepare_subset(shooter, receivers, subset, geometry_);
   prepared_.prepare_surface_ranges(receivers);
   const std::size_t max_vertices = std::max<std::size_t>(3, receivers.max_polygon_size());

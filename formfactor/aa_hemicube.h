@@ -71,6 +71,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
   // (x, y) at x * height + y).
   std::array<std::vector<double>, 2> column_weight_;
   PreparedReceivers prepared_;
+  Vec3 eye_{0.0};  // the current shot's shooting point (the plane order of overfilled layers)
   std::array<FaceTask, kTasks> tasks_;
   TaskSums sums_;
   std::array<UnoccludedList, kTasks> task_unoccluded_;

@@ -3,6 +3,7 @@
 #include "formfactor/coverage_list.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace aarad::formfactor {
 
@@ -24,9 +25,19 @@ std::uint32_t PartialLists::allocate(std::uint32_t capacity) {
   return list;
 }
 
+// Whether `entry` lies wholly behind the covering group whose head is `full`: its depth range starts behind the
+// group's, or it lies in the group's plane (coplanar surfaces, which the group's pieces cover). An entry whose range
+// reaches into the group's may lie in front of part of it, where a surface of the group runs on behind another
+// (coverage_list.h, "A full pixel"), and is kept for the walk.
+static bool hidden_by_full_group(const CoverageEntry& full, const CoverageEntry& entry) {
+  const double far = full.depth + full.spread;
+  return !(entry.depth - entry.spread <= far + kLayerTouch * std::abs(far)) || same_plane_keys(entry, full);
+}
+
 bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) {
   Cell* cells = &pool_[list];
   const std::uint32_t count = cells[0].header.count;
+  const std::uint32_t full = cells[0].header.full;
   const std::uint32_t surface = entry.surface;
   std::uint32_t position = count + 1;
   double group_sum = 0.0;
@@ -53,7 +64,7 @@ bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) 
         ++k;
       } while (k <= count && cells[k].entry.surface == surface);
       position = k;
-    } else if (position > count && cells[0].header.full != 0) {
+    } else if (full != 0 && position > full && hidden_by_full_group(cells[full].entry, entry)) {
       return false;  // behind the covering group
     }
   }
@@ -73,9 +84,20 @@ bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) 
   cells[position].entry = entry;
   Header& header = cells[0].header;
   header.count = count + 1;
+  if (full != 0 && position <= full) header.full = full + 1;
   if (joins && group_sum >= kFullCoverage) {
-    header.count = position;  // everything behind a covering group is hidden
-    header.full = 1;
+    // Everything behind a covering group is hidden, but for the groups whose range reaches into its own.
+    std::uint32_t head = position;
+    while (head > 1 && cells[head - 1].entry.surface == surface) --head;
+    std::uint32_t kept = position;
+    bool keep = false;
+    for (std::uint32_t i = position + 1; i <= header.count; ++i) {
+      if (cells[i].entry.surface != cells[i - 1].entry.surface)
+        keep = !hidden_by_full_group(cells[head].entry, cells[i].entry);
+      if (keep) cells[++kept] = cells[i];
+    }
+    header.count = kept;
+    if (header.full == 0 || header.full > head) header.full = head;
   }
   header.last_surface = surface;
   header.last_end = position + 1;

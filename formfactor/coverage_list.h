@@ -23,19 +23,24 @@
 // A full pixel. A group of one surface whose coverages add up to 1 (within kFullCoverage) hides everything
 // behind it: the walk gives E = A (1 - 1) = 0 there. The arena then drops the entries behind that group and
 // refuses new entries that would go behind it, so a covered pixel stops growing (the paper: "when the entire
-// pixel area is consumed, no items are inserted"). Two kinds of entries are still accepted by a full pixel:
+// pixel area is consumed, no items are inserted"). Three kinds of entries are still accepted by a full pixel:
 // entries in front of the full group (they occlude part of it; it stays full, since the group's own sum does not
-// change), and entries of the full group's own surface, which join the group (for a surface tiled by its pieces
-// they are rounding crumbs; the walk caps the group so that f never exceeds 1). Fullness is decided from a group's
-// own coverage sum, not from f, because the product form of f only reaches 1 through a single full group. An
-// entry dropped this way would get E = 0 from the walk anyway: its layer holds the full group, so its coverages
-// add up to more than 1 and the recurrence gives everything behind the full group nothing.
+// change); entries of the full group's own surface, which join the group (for a surface tiled by its pieces they
+// are rounding crumbs; the walk caps the group so that f never exceeds 1); and entries of another plane whose depth
+// range reaches into the group's, which may stand in front of part of it: the group's pieces tile the pixel, but
+// where the surface runs on behind another that meets it there (a floor past the foot of a wall standing on it),
+// some of them lie behind that other surface, and a walk that knows the planes (CoverageWalk) puts them after it.
+// Fullness is decided from a group's own coverage sum, not from f, because the product form of f only reaches 1
+// through a single full group. An entry dropped this way would get E = 0 from the walk anyway: its range lies
+// behind the full group's, so it walks after the group, when f is 1.
 //
 // Memory: pooled arrays per pixel list (PartialLists), reset per face or block without freeing; no heap
 // allocation per entry once the pools have grown to the largest face seen.
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -68,6 +73,14 @@ struct CoverageEntry {
   float spread = 0.0f;        // the key ranges over [depth - spread, depth + spread] in the pixel (rounded up)
 };
 
+// Whether two entries have the key of one plane in the pixel: equal keys (to kLayerTouch, the rounding of two
+// surfaces' planes computed apart) and equal spreads (to float rounding). Two different planes have equal keys only
+// where they meet on the pixel's ray, and then equal spreads only by coincidence.
+inline bool same_plane_keys(const CoverageEntry& a, const CoverageEntry& b) {
+  return std::abs(a.depth - b.depth) <= kLayerTouch * std::abs(b.depth) &&
+         std::abs(a.spread - b.spread) <= 1e-6f * std::max(a.spread, b.spread);
+}
+
 // Adds `share` to a pixel's f (`covered`), capped so that f never exceeds 1 (overlapping pieces of one surface,
 // rounding); returns what was added, E.
 inline double take_share(double share, double& covered) {
@@ -77,13 +90,30 @@ inline double take_share(double share, double& covered) {
   return e;
 }
 
+// What the walk knows of the receivers' places besides their keys: whether receiver `back` lies behind the plane
+// of receiver `front` as the shooter sees it (every point of it on the far side of that plane or on it, some
+// strictly behind). Then wherever the two overlap in the image `front` hides `back`. This one knows nothing (the
+// lists of the tests, the paper's walk); the AA hemicube asks the receivers' polygons (aa_hemicube.cpp).
+struct NoPlaneOrder {
+  static constexpr bool kActive = false;
+  bool operator()(std::uint32_t /*front*/, std::uint32_t /*back*/) const { return false; }
+};
+
 // The front-to-back walk of section 3.2.1 with layers (see the top of this file). Walks one sorted list, then
 // optionally one more entry behind it.
+//
+// An overfilled layer ordered by planes. Where a surface runs on behind another that meets it inside the pixel (a
+// floor going on past the foot of a wall standing on it), the pixel holds pieces of the floor in front of the wall
+// and behind it, one surface at one key, whose coverages add up to the pixel; with the wall's entry the layer is
+// overfilled, and the recurrence by groups gave the floor the whole pixel and the wall's foot nothing. With a plane
+// order (NoPlaneOrder above), where a plane of the layer has pieces both behind another surface's entry and not,
+// the walk takes the layer's entries in rounds, those hidden by no other entry first (walk_by_planes): the floor in
+// front and the wall's foot then share the pixel side by side, and the floor behind the wall gets what they leave.
 class CoverageWalk {
  public:
   // Walks `list`, sorted front to back with the entries of one surface consecutive, calling emit(receiver, E).
-  template <class Emit>
-  void walk(std::span<const CoverageEntry> list, Emit&& emit) {
+  template <class Emit, class Behind = NoPlaneOrder>
+  void walk(std::span<const CoverageEntry> list, Emit&& emit, const Behind& behind = {}) {
     const std::size_t n = list.size();
     if (n == 1) {  // most partial pixels: nothing to layer
       emit(list[0].receiver, take(list[0].coverage * (1.0 - covered_)));
@@ -106,20 +136,8 @@ class CoverageWalk {
         // Side by side: every entry of the layer sees the f in front of it.
         const double open = 1.0 - covered_;
         for (std::size_t k = i; k < j; ++k) emit(list[k].receiver, take(list[k].coverage * open));
-      } else {
-        // Overlapping in the pixel: the recurrence, one group of one surface at a time, except that groups of one
-        // plane (the same depth key along the pixel's ray and the same spread: coplanar surfaces, such as two
-        // materials of one floor meeting along an edge) share the f in front of the first of them, the paper's
-        // identical-z exception: they lie side by side, and the recurrence would take A_1 A_2 from the second.
-        double open = 0.0;
-        std::size_t head = i;  // the first group of the current run of coplanar groups
-        for (std::size_t k = i; k < j; ++k) {
-          if (k == i || (list[k].surface != list[k - 1].surface && !same_plane(list[k], list[head]))) {
-            open = 1.0 - covered_;
-            head = k;
-          }
-          emit(list[k].receiver, take(list[k].coverage * open));
-        }
+      } else if (!(Behind::kActive && walk_by_planes(list.subspan(i, j - i), emit, behind))) {
+        overlapping(list.subspan(i, j - i), emit);
       }
       i = j;
     }
@@ -131,13 +149,133 @@ class CoverageWalk {
 
  private:
   double take(double share) { return take_share(share, covered_); }
-  // Whether two entries have the key of one plane in the pixel: equal keys (to kLayerTouch, the rounding of two
-  // surfaces' planes computed apart) and equal spreads (to float rounding). Two different planes have equal keys
-  // only where they meet on the pixel's ray, and then equal spreads only by coincidence.
-  static bool same_plane(const CoverageEntry& a, const CoverageEntry& b) {
-    return std::abs(a.depth - b.depth) <= kLayerTouch * std::abs(b.depth) &&
-           std::abs(a.spread - b.spread) <= 1e-6f * std::max(a.spread, b.spread);
+
+  // An overfilled layer, overlapping in the pixel: the recurrence, one group of one surface at a time, except that
+  // groups of one plane (the same depth key along the pixel's ray and the same spread: coplanar surfaces, such as two
+  // materials of one floor meeting along an edge) share the f in front of the first of them, the paper's identical-z
+  // exception: they lie side by side, and the recurrence would take A_1 A_2 from the second. Only the entries for
+  // which `in(k)` holds take part (all of them, but for a round of walk_by_planes).
+  template <class Emit, class In>
+  void overlapping(std::span<const CoverageEntry> layer, Emit& emit, In&& in) {
+    double open = 0.0;
+    std::size_t head = 0, previous = 0;  // the first group of the current run of coplanar groups; the last entry
+    bool first = true;
+    for (std::size_t k = 0; k < layer.size(); ++k) {
+      if (!in(k)) continue;
+      if (first || (layer[k].surface != layer[previous].surface && !same_plane(layer[k], layer[head]))) {
+        open = 1.0 - covered_;
+        head = k;
+      }
+      first = false;
+      previous = k;
+      emit(layer[k].receiver, take(layer[k].coverage * open));
+    }
   }
+  template <class Emit>
+  void overlapping(std::span<const CoverageEntry> layer, Emit& emit) {
+    overlapping(layer, emit, [](std::size_t) { return true; });
+  }
+
+  // The most entries and surfaces of a layer that walk_by_planes orders; larger layers take the recurrence.
+  static constexpr std::size_t kMaxPlaneEntries = 512, kMaxPlaneSurfaces = 16;
+
+  // An overfilled layer ordered by planes (see the class comment). Each surface of the layer is a plane, asked
+  // through its first entry's receiver. Surface Q hides entry k of another surface P when k lies behind Q's plane
+  // and no entry of Q lies behind P's plane: two faces meeting at a convex edge each lie behind the other's plane,
+  // and lie side by side. The entries go in rounds by how many surfaces hide them, fewest first. The first round
+  // lies side by side (or, overfilled itself, takes the recurrence); each later round fills what the rounds before
+  // left of the layer's share of the pixel, side by side when it fits, else in proportion to the entries' coverages.
+  // So the layer gives out all of its share, as the side-by-side walk does (in a closed scene the pixel is covered,
+  // and the recurrence's product would lose the rest where a covering group has dropped what lay behind it): an
+  // entry behind a wall takes only what the entries in front leave. False, with nothing emitted, when no plane of
+  // the layer (a surface, or coplanar surfaces, which the walk takes as one) has entries both hidden and not, or
+  // the layer is too large: then the recurrence walks it, as before. The planes are asked n x (surfaces - 1) times,
+  // and not at all when no plane has two entries.
+  template <class Emit, class Behind>
+  bool walk_by_planes(std::span<const CoverageEntry> layer, Emit& emit, const Behind& behind) {
+    const std::size_t n = layer.size();
+    if (n > kMaxPlaneEntries) return false;
+    // The surfaces, each a run of consecutive entries (the lists keep a surface's entries together).
+    std::array<std::size_t, kMaxPlaneSurfaces + 1> run{};  // surface q's entries: [run[q], run[q + 1])
+    std::size_t surfaces = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k > 0 && layer[k].surface == layer[k - 1].surface) continue;
+      if (surfaces == kMaxPlaneSurfaces) return false;
+      run[surfaces++] = k;
+    }
+    run[surfaces] = n;
+    // Only a plane with two entries or more can run on behind another surface (an entry is planar and convex or
+    // nearly so).
+    bool pieces = surfaces < n;
+    for (std::size_t p = 0; p < surfaces && !pieces; ++p)
+      for (std::size_t q = p + 1; q < surfaces && !pieces; ++q) pieces = same_plane(layer[run[p]], layer[run[q]]);
+    if (!pieces || surfaces < 2) return false;
+    // behind_of[k], bit q: entry k lies behind surface q's plane; some_behind[q], bit p: some entry of q lies behind
+    // surface p's plane.
+    std::array<std::uint16_t, kMaxPlaneEntries> behind_of;
+    std::array<std::uint16_t, kMaxPlaneSurfaces> some_behind{};
+    for (std::size_t p = 0; p < surfaces; ++p) {
+      for (std::size_t k = run[p]; k < run[p + 1]; ++k) {
+        std::uint16_t bits = 0;
+        for (std::size_t q = 0; q < surfaces; ++q)
+          if (q != p && behind(layer[run[q]].receiver, layer[k].receiver)) bits |= std::uint16_t(1u << q);
+        behind_of[k] = bits;
+        some_behind[p] |= bits;
+      }
+    }
+    std::array<std::uint8_t, kMaxPlaneEntries> hidden_by;
+    std::uint8_t most = 0;
+    for (std::size_t p = 0; p < surfaces; ++p) {
+      for (std::size_t k = run[p]; k < run[p + 1]; ++k) {
+        std::uint16_t hiders = behind_of[k];
+        for (std::size_t q = 0; q < surfaces; ++q)
+          if ((some_behind[q] >> p) & 1u) hiders &= std::uint16_t(~(1u << q));
+        hidden_by[k] = static_cast<std::uint8_t>(std::popcount(hiders));
+        most = std::max(most, hidden_by[k]);
+      }
+    }
+    if (most == 0) return false;
+    // Where some plane runs on behind another surface: entries of one plane, some hidden and some not.
+    std::array<std::uint8_t, kMaxPlaneSurfaces> seen{};  // per surface: bit 0 an entry not hidden, bit 1 one hidden
+    for (std::size_t p = 0; p < surfaces; ++p)
+      for (std::size_t k = run[p]; k < run[p + 1]; ++k) seen[p] |= hidden_by[k] == 0 ? 1 : 2;
+    bool runs_on = false;
+    for (std::size_t p = 0; p < surfaces && !runs_on; ++p) {
+      runs_on = seen[p] == 3;
+      for (std::size_t q = p + 1; q < surfaces && !runs_on; ++q)
+        runs_on = (seen[p] | seen[q]) == 3 && same_plane(layer[run[p]], layer[run[q]]);
+    }
+    if (!runs_on) return false;
+    const double open = 1.0 - covered_;
+    double used = 0.0;  // the fraction of the layer's share the rounds so far took
+    for (std::uint8_t round = 0; round <= most; ++round) {
+      double sum = 0.0;
+      std::size_t count = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (hidden_by[k] != round) continue;
+        sum += layer[k].coverage;
+        ++count;
+      }
+      if (count == 0) continue;
+      if (sum <= 1.0 - used + kLayerSlack) {
+        for (std::size_t k = 0; k < n; ++k)
+          if (hidden_by[k] == round) emit(layer[k].receiver, take(layer[k].coverage * open));
+        used += sum;
+      } else if (used == 0.0) {
+        const double before = covered_;
+        overlapping(layer, emit, [&](std::size_t k) { return hidden_by[k] == round; });
+        used = open > 0.0 ? (covered_ - before) / open : 1.0;
+      } else {
+        const double scale = std::max(0.0, 1.0 - used) / sum;  // sum > 1 - used >= 0
+        for (std::size_t k = 0; k < n; ++k)
+          if (hidden_by[k] == round) emit(layer[k].receiver, take(layer[k].coverage * scale * open));
+        used = 1.0;
+      }
+    }
+    return true;
+  }
+
+  static bool same_plane(const CoverageEntry& a, const CoverageEntry& b) { return same_plane_keys(a, b); }
   double covered_ = 0.0;
 };
 
@@ -155,7 +293,8 @@ double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&
 // sorted by insertion sort, so it is one or two cache lines whatever order receivers arrive in. An entry joins
 // the group of its surface when the list has one (after its last piece), else goes in at its depth (behind
 // entries at the same depth; positions are decided at group heads only, so groups stay contiguous). A group
-// whose coverages reach kFullCoverage drops the entries behind it and the list refuses new groups behind it.
+// whose coverages reach kFullCoverage drops the entries behind it and the list refuses new groups behind it (but
+// for those whose depth range reaches into the group's: see "A full pixel" above).
 // A group's coverage sum is its entries' coverages added front to back. The header keeps the group that took the
 // last entry (its surface, where it ends, its sum): a pixel's entries mostly arrive a surface at a time (receivers
 // come in index order, a surface's pieces mostly numbered together), and in the office 88 % of the entries that
@@ -212,7 +351,7 @@ class PartialLists {
   struct Header {
     std::uint32_t count;
     std::uint32_t capacity;
-    std::uint32_t full;          // 1 when the list's last group covers the pixel
+    std::uint32_t full;          // the head of the nearest group that covers the pixel, 0 when none
     std::uint32_t last_surface;  // the group that took the last entry: its surface,
     std::uint32_t last_end;      // the index one past its last piece,
     double last_sum;             // and its coverages added front to back
@@ -274,11 +413,11 @@ class CoverageArena {
 
   // Walks every pixel's list in pixel order, calling emit(pixel, receiver, E), and empties the arena (so the
   // next reset() has nothing to clear).
-  template <class Emit>
-  void take_all(Emit&& emit) {
+  template <class Emit, class Behind = NoPlaneOrder>
+  void take_all(Emit&& emit, const Behind& behind = {}) {
     for (std::size_t p = 0; p < pixels_; ++p) {
       if (p + 16 < pixels_) lists_.prefetch(p + 16);
-      take_pixel(p, depth_[p], receiver_[p], lists_, p, emit);
+      take_pixel(p, depth_[p], receiver_[p], lists_, p, emit, behind);
       depth_[p] = kFar;
     }
     lists_.mark_clean();
@@ -300,16 +439,16 @@ class CoverageArena {
 
   // The walk of one pixel with inline entry (full_depth, full_receiver) and the list `list_pixel` of `lists`:
   // calls emit(pixel, receiver, E) front to back and clears the list. Shared with StagedCoverageArena.
-  template <class Emit>
+  template <class Emit, class Behind = NoPlaneOrder>
   static void take_pixel(std::size_t pixel, double full_depth, std::uint32_t full_receiver, PartialLists& lists,
-                         std::size_t list_pixel, Emit& emit) {
+                         std::size_t list_pixel, Emit& emit, const Behind& behind = {}) {
     if (lists.empty(list_pixel)) {
       if (full_depth != kFar) emit(pixel, full_receiver, 1.0);  // a lone full entry: E = 1
       return;
     }
     CoverageWalk walk;
     walk.walk(lists.reached(list_pixel, full_depth),
-              [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); });
+              [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); }, behind);
     if (full_depth != kFar) emit(pixel, full_receiver, walk.behind(1.0));
     lists.clear(list_pixel);
   }
@@ -390,9 +529,10 @@ class StagedCoverageArena {
 
   // Walks every pixel front to back, calling emit(pixel, receiver, E), and empties the arena. Block by block;
   // within a block, first the pixels of one surface (entries in arrival order), then the others in pixel order.
-  // Each pixel's entries come front to back, as CoverageArena::take_all gives them.
-  template <class Emit>
-  void take_all(Emit&& emit) {
+  // Each pixel's entries come front to back, as CoverageArena::take_all gives them; overfilled layers are ordered
+  // by `behind` (CoverageWalk).
+  template <class Emit, class Behind = NoPlaneOrder>
+  void take_all(Emit&& emit, const Behind& behind = {}) {
     for (std::size_t block = 0; block < blocks_; ++block) {
       const std::size_t begin = block * block_pixels_;
       const std::size_t end = std::min(begin + block_pixels_, pixels_);
@@ -414,7 +554,7 @@ class StagedCoverageArena {
       }
       stage_[block].clear();
       for (std::size_t p = begin; p < end; ++p) {
-        CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit);
+        CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit, behind);
         depth_[p] = kFar;
       }
       lists_.mark_clean();

@@ -334,6 +334,70 @@ TEST(FormfactorCoverageList, AFullEntryBetweenTheDepthsOfOneSurfacesPiecesKeepsT
   EXPECT_DOUBLE_EQ(e[2], 0.4);
 }
 
+// A floor running on behind a wall standing on it, in the pixel at the wall's foot (coverage_list.h, "An overfilled
+// layer ordered by planes"): the floor in front (receiver 0) covers 0.4 below the foot, the floor behind the wall
+// (1) the other 0.6, and the wall's foot (2) the same 0.6 in front of it. One key for the floor's pieces, the wall's
+// a little behind it, ranges overlapping. The walk without planes gives the floor the pixel and the wall nothing;
+// told that the floor behind lies behind the wall's plane, the floor in front and the wall share the pixel.
+struct FloorBehindTheWall {  // receiver 1 lies behind receiver 2's plane
+  static constexpr bool kActive = true;
+  bool operator()(std::uint32_t front, std::uint32_t back) const { return front == 2 && back == 1; }
+};
+struct EachBehindTheOther {  // faces meeting at a convex edge
+  static constexpr bool kActive = true;
+  bool operator()(std::uint32_t front, std::uint32_t back) const { return front != back; }
+};
+
+TEST(FormfactorCoverageList, APlaneOrderPutsTheFloorBehindAWallAfterIt) {
+  const std::vector<CoverageEntry> list = {{1.0, 0.4, 0, 0, 0.2f}, {1.0, 0.6, 1, 0, 0.2f}, {1.05, 0.6, 2, 1, 0.0f}};
+  std::vector<double> plain(3, -1.0), ordered(3, -1.0);
+  CoverageWalk().walk(list, [&](std::uint32_t r, double v) { plain[r] = v; });
+  EXPECT_EQ(plain, (std::vector<double>{0.4, 0.6, 0.0}));
+  CoverageWalk walk;
+  walk.walk(list, [&](std::uint32_t r, double v) { ordered[r] = v; }, FloorBehindTheWall{});
+  EXPECT_DOUBLE_EQ(ordered[0], 0.4);
+  EXPECT_DOUBLE_EQ(ordered[2], 0.6);
+  EXPECT_DOUBLE_EQ(ordered[1], 0.0);
+  EXPECT_DOUBLE_EQ(walk.covered(), 1.0);
+  // With an empty corner of 0.3 beside the wall (the wall's end in the pixel), the floor behind takes what is left:
+  // the layer gives out the whole pixel.
+  const std::vector<CoverageEntry> end = {{1.0, 0.4, 0, 0, 0.2f}, {1.0, 0.6, 1, 0, 0.2f}, {1.05, 0.3, 2, 1, 0.0f}};
+  CoverageWalk end_walk;
+  end_walk.walk(end, [&](std::uint32_t r, double v) { ordered[r] = v; }, FloorBehindTheWall{});
+  EXPECT_DOUBLE_EQ(ordered[1], 0.3);
+  EXPECT_DOUBLE_EQ(end_walk.covered(), 1.0);
+  // Two faces meeting at a convex edge each lie behind the other's plane: neither hides the other, and the
+  // recurrence walks the layer as before.
+  CoverageWalk().walk(list, [&](std::uint32_t r, double v) { ordered[r] = v; }, EachBehindTheOther{});
+  EXPECT_EQ(ordered, plain);
+}
+
+// The floor's pieces cover the pixel, yet the wall standing on it keeps its entry: its depth range reaches into the
+// floor's, so it may lie in front of the floor's part behind it. A surface whose range lies wholly behind the floor's
+// is still refused, and so is a surface in the floor's plane.
+TEST(FormfactorCoverageList, AFullGroupKeepsTheEntriesWhoseRangeReachesIntoItsOwn) {
+  for (const bool wall_first : {false, true}) {
+    CoverageArena arena;
+    arena.reset(1);
+    const CoverageEntry wall{1.05, 0.6, 2, 1, 0.0f};
+    if (wall_first) {
+      EXPECT_TRUE(arena.insert(0, wall));
+    }
+    EXPECT_TRUE(arena.insert(0, {1.0, 0.4, 0, 0, 0.2f}));
+    EXPECT_TRUE(arena.insert(0, {1.0, 0.6, 1, 0, 0.2f}));
+    EXPECT_TRUE(arena.full(0));
+    if (!wall_first) {
+      EXPECT_TRUE(arena.insert(0, wall));
+    }
+    EXPECT_FALSE(arena.insert(0, {1.5, 0.5, 3, 2, 0.1f}));  // wholly behind the floor
+    EXPECT_FALSE(arena.insert(0, {1.0, 0.5, 4, 3, 0.2f}));  // a rug in the floor's plane
+    std::vector<CoverageEntry> kept;
+    arena.for_each(0, [&](const CoverageEntry& e) { kept.push_back(e); });
+    ASSERT_EQ(kept.size(), 3u) << (wall_first ? "wall first" : "wall last");
+    EXPECT_EQ(kept[2].receiver, 2u);
+  }
+}
+
 TEST(FormfactorCoverageList, FullEntryTakesItsPlaceByDepth) {
   CoverageArena arena;
   arena.reset(2);

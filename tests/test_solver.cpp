@@ -379,14 +379,15 @@ TEST(SolverFurnace, APartitionStandingOnTheFloorsInsideIsLitRight) {
   options.converge = 1e-3;
   options.adaptive = false;
   const FurnaceFigures fixed = furnace_figures(options, partition_furnace());
-  // 0.049 measured; 0.077 while the cut's triangles along the foot reached from one of its ends to the other; 0.345
-  // before the cut.
-  EXPECT_LT(fixed.worst, 0.06);
+  // 0.044 measured; 0.049 before the AA hemicube's walk ordered the foot's pixels by planes; 0.077 while the cut's
+  // triangles along the foot reached from one of its ends to the other; 0.345 before the cut.
+  EXPECT_LT(fixed.worst, 0.05);
   EXPECT_LT(fixed.area_rms, 0.02);
   options.adaptive = true;
   const FurnaceFigures adaptive = furnace_figures(options, partition_furnace());
-  // 0.179 measured, at the partition's foot; 0.212 (at its ends) with the slivers along the foot; 70.6 before the cut.
-  EXPECT_LT(adaptive.worst, 0.20);
+  // 0.148 measured, on the partition's foot (over); 0.179 (the foot's lowest leaves, under) before the walk ordered
+  // the foot's pixels by planes; 0.212 (at its ends) with the slivers along the foot; 70.6 before the cut.
+  EXPECT_LT(adaptive.worst, 0.16);
   EXPECT_LT(adaptive.area_rms, 0.02);
 }
 
