@@ -112,8 +112,8 @@ struct NoPlaneOrder {
 class CoverageWalk {
  public:
   // Walks `list`, sorted front to back with the entries of one surface consecutive, calling emit(receiver, E).
-  template <class Emit, class Behind = NoPlaneOrder>
-  void walk(std::span<const CoverageEntry> list, Emit&& emit, const Behind& behind = {}) {
+  template <class Emit, class Order = NoPlaneOrder>
+  void walk(std::span<const CoverageEntry> list, Emit&& emit, const Order& order = {}) {
     const std::size_t n = list.size();
     if (n == 1) {  // most partial pixels: nothing to layer
       emit(list[0].receiver, take(list[0].coverage * (1.0 - covered_)));
@@ -136,8 +136,10 @@ class CoverageWalk {
         // Side by side: every entry of the layer sees the f in front of it.
         const double open = 1.0 - covered_;
         for (std::size_t k = i; k < j; ++k) emit(list[k].receiver, take(list[k].coverage * open));
-      } else if (!(Behind::kActive && walk_by_planes(list.subspan(i, j - i), emit, behind))) {
-        overlapping(list.subspan(i, j - i), emit);
+      } else {
+        bool ordered = false;
+        if constexpr (Order::kActive) ordered = walk_by_planes(list.subspan(i, j - i), emit, order);
+        if (!ordered) overlapping(list.subspan(i, j - i), emit);
       }
       i = j;
     }
@@ -191,8 +193,8 @@ class CoverageWalk {
   // the layer (a surface, or coplanar surfaces, which the walk takes as one) has entries both hidden and not, or
   // the layer is too large: then the recurrence walks it, as before. The planes are asked n x (surfaces - 1) times,
   // and not at all when no plane has two entries.
-  template <class Emit, class Behind>
-  bool walk_by_planes(std::span<const CoverageEntry> layer, Emit& emit, const Behind& behind) {
+  template <class Emit, class Order>
+  bool walk_by_planes(std::span<const CoverageEntry> layer, Emit& emit, const Order& order) {
     const std::size_t n = layer.size();
     if (n > kMaxPlaneEntries) return false;
     // The surfaces, each a run of consecutive entries (the lists keep a surface's entries together).
@@ -218,7 +220,7 @@ class CoverageWalk {
       for (std::size_t k = run[p]; k < run[p + 1]; ++k) {
         std::uint16_t bits = 0;
         for (std::size_t q = 0; q < surfaces; ++q)
-          if (q != p && behind(layer[run[q]].receiver, layer[k].receiver)) bits |= std::uint16_t(1u << q);
+          if (q != p && order(layer[run[q]].receiver, layer[k].receiver)) bits |= std::uint16_t(1u << q);
         behind_of[k] = bits;
         some_behind[p] |= bits;
       }
@@ -413,11 +415,11 @@ class CoverageArena {
 
   // Walks every pixel's list in pixel order, calling emit(pixel, receiver, E), and empties the arena (so the
   // next reset() has nothing to clear).
-  template <class Emit, class Behind = NoPlaneOrder>
-  void take_all(Emit&& emit, const Behind& behind = {}) {
+  template <class Emit, class Order = NoPlaneOrder>
+  void take_all(Emit&& emit, const Order& order = {}) {
     for (std::size_t p = 0; p < pixels_; ++p) {
       if (p + 16 < pixels_) lists_.prefetch(p + 16);
-      take_pixel(p, depth_[p], receiver_[p], lists_, p, emit, behind);
+      take_pixel(p, depth_[p], receiver_[p], lists_, p, emit, order);
       depth_[p] = kFar;
     }
     lists_.mark_clean();
@@ -439,16 +441,16 @@ class CoverageArena {
 
   // The walk of one pixel with inline entry (full_depth, full_receiver) and the list `list_pixel` of `lists`:
   // calls emit(pixel, receiver, E) front to back and clears the list. Shared with StagedCoverageArena.
-  template <class Emit, class Behind = NoPlaneOrder>
+  template <class Emit, class Order = NoPlaneOrder>
   static void take_pixel(std::size_t pixel, double full_depth, std::uint32_t full_receiver, PartialLists& lists,
-                         std::size_t list_pixel, Emit& emit, const Behind& behind = {}) {
+                         std::size_t list_pixel, Emit& emit, const Order& order = {}) {
     if (lists.empty(list_pixel)) {
       if (full_depth != kFar) emit(pixel, full_receiver, 1.0);  // a lone full entry: E = 1
       return;
     }
     CoverageWalk walk;
     walk.walk(lists.reached(list_pixel, full_depth),
-              [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); }, behind);
+              [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); }, order);
     if (full_depth != kFar) emit(pixel, full_receiver, walk.behind(1.0));
     lists.clear(list_pixel);
   }
@@ -530,9 +532,9 @@ class StagedCoverageArena {
   // Walks every pixel front to back, calling emit(pixel, receiver, E), and empties the arena. Block by block;
   // within a block, first the pixels of one surface (entries in arrival order), then the others in pixel order.
   // Each pixel's entries come front to back, as CoverageArena::take_all gives them; overfilled layers are ordered
-  // by `behind` (CoverageWalk).
-  template <class Emit, class Behind = NoPlaneOrder>
-  void take_all(Emit&& emit, const Behind& behind = {}) {
+  // by `order` (CoverageWalk).
+  template <class Emit, class Order = NoPlaneOrder>
+  void take_all(Emit&& emit, const Order& order = {}) {
     for (std::size_t block = 0; block < blocks_; ++block) {
       const std::size_t begin = block * block_pixels_;
       const std::size_t end = std::min(begin + block_pixels_, pixels_);
@@ -554,7 +556,7 @@ class StagedCoverageArena {
       }
       stage_[block].clear();
       for (std::size_t p = begin; p < end; ++p) {
-        CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit, behind);
+        CoverageArena::take_pixel(p, depth_[p], receiver_[p], lists_, p - begin, emit, order);
         depth_[p] = kFar;
       }
       lists_.mark_clean();
