@@ -3,7 +3,10 @@
 // projected, and scan-converted with the exact area rasterizer of the paper's Figure 4 (core/area_rasterizer.h);
 // every pixel keeps a depth-sorted list of (receiver, A, depth, spread, surface) (coverage_list.h); walking each
 // list front to back, a receiver gets E_k = A_k (1 - f_{k-1}) of the pixel's delta form factor, and receivers
-// that meet inside the pixel share it side by side (coverage_list.h, "Layers").
+// that meet inside the pixel share it side by side (coverage_list.h, "Layers"). Where a surface runs on behind
+// another that meets it in the pixel (a floor past a wall's foot), the walk orders the overfilled layer by the
+// receivers' planes, which this back end answers from the view's polygons (PlaneOrder in aa_hemicube.cpp;
+// coverage_list.h, CoverageWalk).
 //
 // The depth kept per receiver and pixel is the distance along the face axis at which the ray through the pixel
 // centre meets the receiver's plane, also where the receiver covers only part of the pixel; where that ray meets
