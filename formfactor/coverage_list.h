@@ -164,7 +164,7 @@ class CoverageWalk {
     bool first = true;
     for (std::size_t k = 0; k < layer.size(); ++k) {
       if (!in(k)) continue;
-      if (first || (layer[k].surface != layer[previous].surface && !same_plane(layer[k], layer[head]))) {
+      if (first || (layer[k].surface != layer[previous].surface && !same_plane_keys(layer[k], layer[head]))) {
         open = 1.0 - covered_;
         head = k;
       }
@@ -210,7 +210,7 @@ class CoverageWalk {
     // nearly so).
     bool pieces = surfaces < n;
     for (std::size_t p = 0; p < surfaces && !pieces; ++p)
-      for (std::size_t q = p + 1; q < surfaces && !pieces; ++q) pieces = same_plane(layer[run[p]], layer[run[q]]);
+      for (std::size_t q = p + 1; q < surfaces && !pieces; ++q) pieces = same_plane_keys(layer[run[p]], layer[run[q]]);
     if (!pieces || surfaces < 2) return false;
     // behind_of[k], bit q: entry k lies behind surface q's plane; some_behind[q], bit p: some entry of q lies behind
     // surface p's plane.
@@ -225,27 +225,28 @@ class CoverageWalk {
         some_behind[p] |= bits;
       }
     }
+    // hidden_by[k]: how many surfaces hide entry k; seen[p]: bit 0 when an entry of surface p is hidden by none,
+    // bit 1 when one is hidden.
     std::array<std::uint8_t, kMaxPlaneEntries> hidden_by;
+    std::array<std::uint8_t, kMaxPlaneSurfaces> seen{};
     std::uint8_t most = 0;
     for (std::size_t p = 0; p < surfaces; ++p) {
+      std::uint16_t mutual = 0;  // the surfaces some entry of which lies behind p's plane: they hide none of p's
+      for (std::size_t q = 0; q < surfaces; ++q)
+        if ((some_behind[q] >> p) & 1u) mutual |= std::uint16_t(1u << q);
       for (std::size_t k = run[p]; k < run[p + 1]; ++k) {
-        std::uint16_t hiders = behind_of[k];
-        for (std::size_t q = 0; q < surfaces; ++q)
-          if ((some_behind[q] >> p) & 1u) hiders &= std::uint16_t(~(1u << q));
-        hidden_by[k] = static_cast<std::uint8_t>(std::popcount(hiders));
+        hidden_by[k] = static_cast<std::uint8_t>(std::popcount(std::uint16_t(behind_of[k] & ~mutual)));
         most = std::max(most, hidden_by[k]);
+        seen[p] |= hidden_by[k] == 0 ? 1 : 2;
       }
     }
     if (most == 0) return false;
     // Where some plane runs on behind another surface: entries of one plane, some hidden and some not.
-    std::array<std::uint8_t, kMaxPlaneSurfaces> seen{};  // per surface: bit 0 an entry not hidden, bit 1 one hidden
-    for (std::size_t p = 0; p < surfaces; ++p)
-      for (std::size_t k = run[p]; k < run[p + 1]; ++k) seen[p] |= hidden_by[k] == 0 ? 1 : 2;
     bool runs_on = false;
     for (std::size_t p = 0; p < surfaces && !runs_on; ++p) {
       runs_on = seen[p] == 3;
       for (std::size_t q = p + 1; q < surfaces && !runs_on; ++q)
-        runs_on = (seen[p] | seen[q]) == 3 && same_plane(layer[run[p]], layer[run[q]]);
+        runs_on = (seen[p] | seen[q]) == 3 && same_plane_keys(layer[run[p]], layer[run[q]]);
     }
     if (!runs_on) return false;
     const double open = 1.0 - covered_;
@@ -277,7 +278,6 @@ class CoverageWalk {
     return true;
   }
 
-  static bool same_plane(const CoverageEntry& a, const CoverageEntry& b) { return same_plane_keys(a, b); }
   double covered_ = 0.0;
 };
 

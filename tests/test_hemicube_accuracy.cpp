@@ -405,8 +405,8 @@ TEST(HemicubeAccuracy, EdgeOnCardInFrontOfAFloorKeepsItsFormFactor) {
 // A floor that runs on behind a partition standing on it (docs/form-factors.md, "Known limits"): seen from a point
 // in front of the partition, a pixel on its foot holds floor in front of the partition, floor behind it and the
 // partition's foot. The two floor pieces are one surface and tile the pixel; taken as one group at one depth they
-// hid the partition's foot, and the floor behind it took its share: the strip got 6.5e-7 to 2.2e-4 of its
-// 3.58e-4, the hidden floor 3.7e-4 to 1.2e-3. The foot is a strip 0.004 high (a fifth of a pixel there), the floor
+// hid the partition's foot, and the floor behind it took its share: the strip got 6.5e-7, 1.95e-4 and 2.19e-4 of its
+// 3.58e-4 (N = 100, 100 turned, 200 turned; 3.586e-4 at N = 200 unturned), the hidden floor 3.7e-4 to 1.2e-3. The foot is a strip 0.004 high (a fifth of a pixel there), the floor
 // behind is hidden from the shooter: exact factors from the analytic back end, the strip's unoccluded (nothing stands
 // between it and the shooter), the hidden floor's 0. What the hidden floor still gets (1.0e-5 at N = 100, 4.6e-6 at
 // N = 200, with the frame turned) lies in the pixels at the partition's two ends, where the floor behind, the
