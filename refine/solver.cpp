@@ -184,6 +184,8 @@ void Solver::initialise() {
                         !(positive_zero(e.r) && positive_zero(e.g) && positive_zero(e.b))});
   }
   received_factor_.assign(nodes, 0.0);
+  shot_so_far_.assign(nodes, Rgb{});
+  nodes_after_shot_.assign(nodes, 0);
   // The near-field correction's table of patches, by patch id (the receivers' patch ids are the patches' nodes).
   mesh::NodeId last_patch = 0;
   for (mesh::NodeId patch : hierarchy_.patches()) last_patch = std::max(last_patch, patch);
@@ -366,6 +368,26 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     near.unoccluded = unoccluded_;
     near_field_.apply(near, cache_.view(), subset, ff_);
   }
+  if (subset.empty() && !(history_flux_ == Rgb{})) {
+    // The leaves made since the shooter's last shot (all among those a reused row shoots into), each with the
+    // leaf it comes from as the mesh stood then.
+    const mesh::NodeId known = nodes_after_shot_[shooter];
+    history_pieces_.clear();
+    history_ancestor_.clear();
+    const auto add = [&](std::uint32_t receiver) {
+      mesh::NodeId ancestor = cache_.leaf(receiver);
+      if (ancestor < known) return;
+      while (ancestor >= known) ancestor = hierarchy_.parent(ancestor);
+      history_pieces_.push_back(receiver);
+      history_ancestor_.push_back(ancestor);
+    };
+    if (row != nullptr) {
+      for (const std::uint32_t receiver : shot) add(receiver);
+    } else {
+      for (std::uint32_t receiver = 0; receiver < ff_.size(); ++receiver) add(receiver);
+    }
+    share_out_history(history_pieces_, history_ancestor_);
+  }
   times_.form_factors += seconds_since(start);
 }
 
@@ -547,6 +569,7 @@ bool Solver::shoot(const PatchScan& scan) {
   const Rgb overshoot = options_.overshoot ? material(shooter).reflectance * scan.ambient : Rgb{};
   const double area = hierarchy_.area(shooter);
   const Rgb shot_flux = hierarchy_.unshot(shooter) * (relaxation * area) + overshoot * area;
+  history_flux_ = shot_so_far_[shooter];
 
   // received_factor_ holds this shot's factor per node: clear what the previous shot wrote (not all nodes; only
   // shots that split or reused a row whose leaves split wrote any).
@@ -621,6 +644,8 @@ bool Solver::shoot(const PatchScan& scan) {
   last_shooter_ = shooter;
 
   if (options_.adaptive) substructure(shooter, shot_flux);
+  shot_so_far_[shooter] += shot_flux;
+  nodes_after_shot_[shooter] = static_cast<mesh::NodeId>(hierarchy_.node_count());
   wait_for_row();
   return true;
 }
@@ -892,6 +917,67 @@ void Solver::share_out_split_factors(mesh::NodeId first_new) {
   for (const mesh::NodeId ancestor : piece_ancestor_) share_slot_[ancestor] = kNoSlot;
 }
 
+// A leaf's pieces inherit its B (mesh/hierarchy.h, Split), so they hold every shot made before the split in the
+// leaf's even density, where their own factors from those shooters differ: along a wall's foot, a leaf split late
+// keeps the share of the far walls and the ceiling that its upper part saw, and then gets its own, larger share of
+// the floor patches beside it as they shoot. In the partition furnace that left the foot's leaves up to 15 % over
+// B = 2 (docs/hierarchy.md, "Contact lines"). Each shooter's flux shot so far is kept (shot_so_far_), and the mesh's
+// node count after its last shot (nodes_after_shot_): in its next shot (`pieces`: the leaves made since, each with
+// the leaf it comes from, `ancestors`), and in each round of its own substructuring (the new leaves, with the
+// leaves they were split from), the pieces of one leaf move its earlier shots among them by their own factors of
+// this shot: piece p gets rho x (flux so far) x (F_p - F A_p / A) / A_p, F and A being the pieces' total factor and
+// area. The changes of one leaf's pieces add up to no flux, so no patch's dB, no absorbed flux and no energy
+// balance changes; only how B is spread over the leaf. Split before the shots, the pieces would have got the same
+// (test SolverHistory.*). Shooters that never shoot again after a split leave their share inherited. A piece
+// gives back at most what it has over its emission: where this shot's factors are not those of the earlier shots
+// (the near-field correction's scale changes a little with the receivers), a leaf's changes are scaled down
+// together.
+void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors) {
+  if (pieces.empty()) return;
+  if (share_slot_.size() < hierarchy_.node_count()) share_slot_.resize(hierarchy_.node_count(), kNoSlot);
+  share_total_.clear();
+  share_area_.clear();
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    std::uint32_t& slot = share_slot_[ancestors[k]];
+    if (slot == kNoSlot) {
+      slot = static_cast<std::uint32_t>(share_total_.size());
+      share_total_.push_back(0.0);
+      share_area_.push_back(0.0);
+    }
+    share_total_[slot] += ff_[pieces[k]];
+    share_area_[slot] += hierarchy_.area(cache_.leaf(pieces[k]));
+  }
+  // Per piece the change of its B; per slot the part of the changes that leaves every piece's B at least its
+  // emission.
+  history_change_.assign(pieces.size(), Rgb{});
+  share_scale_.assign(share_total_.size(), 1.0);
+  const auto lowest_part = [](double available, double change, double part) {
+    return change < 0.0 ? std::min(part, std::max(0.0, available) / -change) : part;
+  };
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const mesh::NodeId piece = cache_.leaf(pieces[k]);
+    const std::uint32_t slot = share_slot_[ancestors[k]];
+    if (ancestors[k] == piece || !(share_area_[slot] > 0.0)) continue;
+    const double area = hierarchy_.area(piece);
+    const double change = ff_[pieces[k]] - share_total_[slot] * (area / share_area_[slot]);
+    const Rgb delta = material(piece).reflectance * (history_flux_ * (change / area));
+    history_change_[k] = delta;
+    const Rgb available = hierarchy_.radiosity(piece) - material(piece).emission;
+    double& part = share_scale_[slot];
+    part = lowest_part(available.r, delta.r, part);
+    part = lowest_part(available.g, delta.g, part);
+    part = lowest_part(available.b, delta.b, part);
+  }
+  bool changed = false;
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    if (history_change_[k] == Rgb{}) continue;
+    hierarchy_.radiosity(cache_.leaf(pieces[k])) += history_change_[k] * share_scale_[share_slot_[ancestors[k]]];
+    changed = true;
+  }
+  for (const mesh::NodeId ancestor : ancestors) share_slot_[ancestor] = kNoSlot;
+  if (changed) luminance_revision_ = kNoRevision;
+}
+
 void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
   auto start = Clock::now();
   const std::uint32_t shooter_surface = hierarchy_.surface(shooter);
@@ -923,6 +1009,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
       ff_.assign(cache_.size(), 0.0);
       compute_form_factors(shooter, subset_);
       share_out_split_factors(first_new);
+      if (!(history_flux_ == Rgb{})) share_out_history(subset_, piece_ancestor_);
     }
     start = Clock::now();
     take_back_split_shares(split_nodes, first_new, new_leaves, shot_flux);

@@ -234,6 +234,9 @@ class Solver {
   // After the near-field correction: scales the new leaves of every split leaf so that together they get the factor
   // it had received.
   void share_out_split_factors(mesh::NodeId first_new);
+  // Moves the shooter's earlier shots (history_flux_) among the pieces of each leaf split since it last shot, by
+  // their factors of this shot in ff_ (see solver.cpp).
+  void share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors);
   // Makes luminance_ and largest_reflected_ current for the receiver view (and deposits_ with them).
   void update_luminance();
   // Rebuilds deposits_ when the receiver view changed.
@@ -276,6 +279,16 @@ class Solver {
   std::vector<mesh::NodeId> piece_ancestor_;
   std::vector<std::uint32_t> share_slot_;
   std::vector<double> share_total_, share_area_;
+  // share_out_history's state: per patch (by NodeId) the flux it has shot so far and the hierarchy's node count
+  // after its last shot; the current shooter's flux before this shot; scratch: the pieces, their ancestors, their
+  // changes of B, and per ancestor's slot the part of the changes applied.
+  std::vector<Rgb> shot_so_far_;
+  std::vector<mesh::NodeId> nodes_after_shot_;
+  Rgb history_flux_{};
+  std::vector<std::uint32_t> history_pieces_;
+  std::vector<mesh::NodeId> history_ancestor_;
+  std::vector<Rgb> history_change_;
+  std::vector<double> share_scale_;
   std::vector<mesh::NodeId> factor_written_;  // the nodes whose received_factor_ the current shot set
   // Per NodeId: 1 when the hierarchy refused to split the node (deepest level, smallest area, or already split).
   // A leaf's refusal never changes (its level and corners stay), and such leaves come back as split candidates
