@@ -876,6 +876,22 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
 // the balance holds through splits. Before, only the pieces of reshaped leaves and overlapping surfaces were: a rug
 // laid on the floor of a closed room lost 6.2 % of the emitted flux in its lamp's four shots, a box standing on the
 // floor made 3.6e-6 out of nothing, stairs against a wall 3.5e-5 (tests SolverEnergy.*ThroughSplits).
+void Solver::sum_pieces(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors) {
+  if (share_slot_.size() < hierarchy_.node_count()) share_slot_.resize(hierarchy_.node_count(), kNoSlot);
+  share_total_.clear();
+  share_area_.clear();
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    std::uint32_t& slot = share_slot_[ancestors[k]];
+    if (slot == kNoSlot) {
+      slot = static_cast<std::uint32_t>(share_total_.size());
+      share_total_.push_back(0.0);
+      share_area_.push_back(0.0);
+    }
+    share_total_[slot] += ff_[pieces[k]];
+    share_area_[slot] += hierarchy_.area(cache_.leaf(pieces[k]));
+  }
+}
+
 void Solver::share_out_split_factors(mesh::NodeId first_new) {
   if (subset_.empty()) return;
   // Per piece, the split leaf it comes from: the node that was a leaf when the shot was received.
@@ -885,20 +901,7 @@ void Solver::share_out_split_factors(mesh::NodeId first_new) {
     while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
     piece_ancestor_[k] = ancestor;
   }
-  // Per split leaf, a slot holding its pieces' total factor and area, summed in the subset's order.
-  if (share_slot_.size() < hierarchy_.node_count()) share_slot_.resize(hierarchy_.node_count(), kNoSlot);
-  share_total_.clear();
-  share_area_.clear();
-  for (std::size_t k = 0; k < subset_.size(); ++k) {
-    std::uint32_t& slot = share_slot_[piece_ancestor_[k]];
-    if (slot == kNoSlot) {
-      slot = static_cast<std::uint32_t>(share_total_.size());
-      share_total_.push_back(0.0);
-      share_area_.push_back(0.0);
-    }
-    share_total_[slot] += ff_[subset_[k]];
-    share_area_[slot] += hierarchy_.area(cache_.leaf(subset_[k]));
-  }
+  sum_pieces(subset_, piece_ancestor_);
   for (std::size_t k = 0; k < subset_.size(); ++k) {
     const std::uint32_t receiver = subset_[k];
     const mesh::NodeId ancestor = piece_ancestor_[k];
@@ -934,19 +937,7 @@ void Solver::share_out_split_factors(mesh::NodeId first_new) {
 // together.
 void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors) {
   if (pieces.empty()) return;
-  if (share_slot_.size() < hierarchy_.node_count()) share_slot_.resize(hierarchy_.node_count(), kNoSlot);
-  share_total_.clear();
-  share_area_.clear();
-  for (std::size_t k = 0; k < pieces.size(); ++k) {
-    std::uint32_t& slot = share_slot_[ancestors[k]];
-    if (slot == kNoSlot) {
-      slot = static_cast<std::uint32_t>(share_total_.size());
-      share_total_.push_back(0.0);
-      share_area_.push_back(0.0);
-    }
-    share_total_[slot] += ff_[pieces[k]];
-    share_area_[slot] += hierarchy_.area(cache_.leaf(pieces[k]));
-  }
+  sum_pieces(pieces, ancestors);
   // Per piece the change of its B; per slot the part of the changes that leaves every piece's B at least its
   // emission.
   history_change_.assign(pieces.size(), Rgb{});

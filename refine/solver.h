@@ -231,6 +231,10 @@ class Solver {
   void record_shot_factors();
   void take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
                               std::span<const mesh::NodeId> new_leaves, const Rgb& shot_flux);
+  // Per ancestor of `pieces` (receivers, with their ancestors), a slot in share_slot_ holding the pieces' total
+  // factor (from ff_) and area in share_total_ and share_area_, summed in the pieces' order. The caller puts the
+  // ancestors' slots back to kNoSlot.
+  void sum_pieces(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors);
   // After the near-field correction: scales the new leaves of every split leaf so that together they get the factor
   // it had received.
   void share_out_split_factors(mesh::NodeId first_new);
@@ -273,8 +277,8 @@ class Solver {
   // is the shot's flux times this factor. Only substructuring reads it, and only after a split: the shot's own
   // factors are copied in from ff_ then (record_shot_factors), not by every shot's deposit loop.
   std::vector<double> received_factor_;
-  // share_out_split_factors' work: per piece of the subset its split leaf; per node a split leaf's slot (kNoSlot
-  // between calls); per slot the pieces' total factor and area.
+  // share_out_split_factors' and share_out_history's work: per piece of the subset its split leaf; per node a split
+  // leaf's slot (kNoSlot between calls); per slot the pieces' total factor and area (sum_pieces).
   static constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<mesh::NodeId> piece_ancestor_;
   std::vector<std::uint32_t> share_slot_;
