@@ -192,8 +192,16 @@ void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& 
   triangles.push_back({remaining[0], remaining[1], remaining[2]});
 }
 
-double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b) {
-  std::vector<Vec2> current(a.begin(), a.end()), next;
+void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out) {
+  std::vector<Vec2> scratch;
+  convex_intersection(a, b, out, scratch);
+}
+
+void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out,
+                         std::vector<Vec2>& scratch) {
+  std::vector<Vec2>& current = out;
+  current.assign(a.begin(), a.end());
+  std::vector<Vec2>& next = scratch;
   for (std::size_t i = 0; i < b.size() && current.size() >= 3; ++i) {
     const Vec2 p = b[i], q = b[(i + 1) % b.size()];
     // Inside: on the left of the edge p -> q (or on it).
@@ -214,7 +222,12 @@ double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b
     }
     current.swap(next);
   }
-  return current.size() >= 3 ? std::max(0.0, signed_area(current)) : 0.0;
+}
+
+double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b) {
+  std::vector<Vec2> intersection;
+  convex_intersection(a, b, intersection);
+  return intersection.size() >= 3 ? std::max(0.0, signed_area(intersection)) : 0.0;
 }
 
 }  // namespace aarad

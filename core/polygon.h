@@ -40,7 +40,12 @@ bool contains(std::span<const Vec2> polygon, const Vec2& p);
 // `triangles`. Vertices where the boundary goes straight on are clipped like any other ear; the resulting
 // zero-area triangles are left for the caller to drop.
 void ear_clip(std::span<const Vec2> polygon, std::vector<std::array<std::size_t, 3>>& triangles);
-// Area of the intersection of two convex polygons, both counter-clockwise (Sutherland-Hodgman, in doubles).
+// The intersection of two convex polygons, both counter-clockwise (Sutherland-Hodgman, in doubles), into `out`
+// (fewer than 3 vertices when it has no area); and its area.
+void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out);
+// The same with the caller's scratch buffer (no allocation once the buffers have grown).
+void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out,
+                         std::vector<Vec2>& scratch);
 double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b);
 
 // The axis that project_to_2d drops for normal `n`: its largest component (0, 1, 2 for x, y, z; ties to the

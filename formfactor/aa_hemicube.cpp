@@ -1,11 +1,14 @@
 // The anti-aliased hemicube: Chandran, Kiran, Phani and Rai, section 3.2 (see aa_hemicube.h).
 #include "formfactor/aa_hemicube.h"
 
+#include "core/polygon.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 namespace aarad::formfactor {
 namespace {
@@ -16,10 +19,94 @@ namespace {
 // (the points where a floor is cut along a wall's foot): 1e-12 of the coordinates' and the plane offset's size, some
 // four thousand units in the last place, yet only 1e-5 for a scene 1e7 from the origin (1e-10 gave the same numbers
 // in the partition furnace and in a furnace room with a box turned by 0.35 rad standing on its floor).
+//
+// The part of `back` in a pixel that `fronts` cover in the image (hidden_part): the receivers are projected as the
+// task rasterized them (`project`, into the task's pixel coordinates, counter-clockwise), `back` clipped to the
+// pixel's square, and the areas of its intersections with each front added up. Areas add up over the pieces of a
+// split receiver, on either side, so a leaf's pieces are still hidden together as the leaf was (the factors a
+// reused row keeps stay those of a fresh shot).
+using detail::ProjectionCache;
+
+template <class Project>
 struct PlaneOrder {
   static constexpr bool kActive = true;
   const ReceiverView& receivers;
   Vec3 eye;
+  const Project* project = nullptr;  // project(receiver, out)
+  std::vector<Vec2>* buffers = nullptr;  // five polygons' room
+  ProjectionCache* cache = nullptr;
+  std::size_t height = 1;  // pixels per column (the arena's pixel p is column p / height, row p % height)
+  std::size_t pixel = 0;
+
+  PlaneOrder at(std::size_t p) const {
+    PlaneOrder bound = *this;
+    bound.pixel = p;
+    return bound;
+  }
+
+  double hidden_part(std::uint32_t back, std::span<const CoverageEntry> fronts) const {
+    std::vector<Vec2>& shape = buffers[0];
+    std::vector<Vec2>& in_pixel = buffers[1];
+    std::vector<Vec2>& both = buffers[3];
+    std::vector<Vec2>& scratch = buffers[4];
+    const auto x = static_cast<double>(pixel / height), y = static_cast<double>(pixel % height);
+    const std::array<Vec2, 4> square = {Vec2(x, y), Vec2(x + 1.0, y), Vec2(x + 1.0, y + 1.0), Vec2(x, y + 1.0)};
+    (*project)(back, shape);
+    const Box box = box_of(shape);
+    if (box.x_min >= x && box.x_max <= x + 1.0 && box.y_min >= y && box.y_max <= y + 1.0) {
+      in_pixel.assign(shape.begin(), shape.end());  // a piece inside the pixel (most are)
+    } else {
+      convex_intersection(square, shape, in_pixel, scratch);
+    }
+    const double area = in_pixel.size() >= 3 ? signed_area(in_pixel) : 0.0;
+    if (!(area > 0.0)) return 1.0;  // nothing to tell: hidden, as the plane says
+    const Box inside = box_of(in_pixel);
+    double hidden = 0.0;
+    for (std::size_t i = 0; i < fronts.size() && hidden < area; ++i) {
+      const std::span<const Vec2> front_shape = projected(fronts[i].receiver);
+      if (front_shape.size() < 3 || !inside.meets(box_of(front_shape))) continue;
+      convex_intersection(in_pixel, front_shape, both, scratch);
+      if (both.size() >= 3) hidden += std::max(0.0, signed_area(both));
+    }
+    return std::min(1.0, hidden / area);
+  }
+
+  struct Box {
+    double x_min, x_max, y_min, y_max;
+    bool meets(const Box& o) const {
+      return x_min <= o.x_max && o.x_min <= x_max && y_min <= o.y_max && o.y_min <= y_max;
+    }
+  };
+  static Box box_of(std::span<const Vec2> polygon) {
+    Box b{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+          std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    for (const Vec2& p : polygon) {
+      b.x_min = std::min(b.x_min, p.x);
+      b.x_max = std::max(b.x_max, p.x);
+      b.y_min = std::min(b.y_min, p.y);
+      b.y_max = std::max(b.y_max, p.y);
+    }
+    return b;
+  }
+
+  // A front receiver's projection, made once per pixel (a wall's few entries hide many pieces of a floor).
+  std::span<const Vec2> projected(std::uint32_t receiver) const {
+    ProjectionCache& c = *cache;
+    if (c.pixel != pixel) {
+      c.pixel = pixel;
+      c.receivers.clear();
+      c.starts.assign(1, 0);
+      c.points.clear();
+    }
+    for (std::size_t i = 0; i < c.receivers.size(); ++i)
+      if (c.receivers[i] == receiver) return {c.points.data() + c.starts[i], c.starts[i + 1] - c.starts[i]};
+    std::vector<Vec2>& shape = buffers[2];
+    (*project)(receiver, shape);
+    c.receivers.push_back(receiver);
+    c.points.insert(c.points.end(), shape.begin(), shape.end());
+    c.starts.push_back(c.points.size());
+    return {c.points.data() + c.starts[c.starts.size() - 2], shape.size()};
+  }
 
   bool operator()(std::uint32_t front, std::uint32_t back) const {
     const Plane& plane = receivers.plane(front);
@@ -95,6 +182,18 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
         !(box.x_max > 0.0 && box.x_min < width))
       return 0;
     return m;
+  };
+  // Receiver i as place() projects it, counter-clockwise, into `out` (empty when it has nothing on the face): the
+  // plane order's view of it.
+  const auto project = [&](std::uint32_t i, std::vector<Vec2>& out) {
+    ProjectedBox unused;
+    const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
+                                       b.clipped);
+    out.clear();
+    if (m == 0 || !project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, shift, b.projected, unused))
+      return;
+    out.assign(b.projected.begin(), b.projected.begin() + static_cast<std::ptrdiff_t>(m));
+    if (signed_area(out) < 0.0) std::reverse(out.begin(), out.end());
   };
   // A re-shot subset: only the pixels its receivers may cover matter.
   const bool masked = tiles != nullptr;
@@ -172,6 +271,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
   std::uint32_t run_receiver = 0;
   double run_sum = 0.0;
+  b.order_cache.pixel = ProjectionCache::kNone;  // the last task's projections are not this one's
   arena.take_all(
       [&](std::size_t pixel, std::uint32_t receiver, double visible) {
         const double contribution = visible * weight[pixel];
@@ -183,7 +283,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
           run_sum += contribution;
         }
       },
-      PlaneOrder{receivers, eye_});
+      PlaneOrder<decltype(project)>{receivers, eye_, &project, b.order.data(), &b.order_cache, column_height});
   if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 

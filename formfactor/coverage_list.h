@@ -94,6 +94,10 @@ inline double take_share(double share, double& covered) {
 // of receiver `front` as the shooter sees it (every point of it on the far side of that plane or on it, some
 // strictly behind). Then wherever the two overlap in the image `front` hides `back`. This one knows nothing (the
 // lists of the tests, the paper's walk); the AA hemicube asks the receivers' polygons (aa_hemicube.cpp).
+//
+// An active order also says which part of `back` in the pixel the entries `fronts` (of surfaces whose planes `back`
+// lies behind) cover in the image, hidden_part(back, fronts) in [0, 1]: the rest of it is seen beside them (a
+// floor's piece past the end of a wall standing on it). An order bound to a pixel comes from at(pixel).
 struct NoPlaneOrder {
   static constexpr bool kActive = false;
   bool operator()(std::uint32_t /*front*/, std::uint32_t /*back*/) const { return false; }
@@ -187,6 +191,8 @@ class CoverageWalk {
   // and lie side by side. The entries go in rounds by how many surfaces hide them, fewest first. The first round
   // lies side by side (or, overfilled itself, takes the recurrence); each later round fills what the rounds before
   // left of the layer's share of the pixel, side by side when it fits, else in proportion to the entries' coverages.
+  // Of a hidden entry, the part its hiders do not cover in the image (Order::hidden_part: a floor's piece past the
+  // end of a wall standing on it) goes in the first round, when the first round still fits in the pixel with it.
   // So the layer gives out all of its share, as the side-by-side walk does (in a closed scene the pixel is covered,
   // and the recurrence's product would lose the rest where a covering group has dropped what lay behind it): an
   // entry behind a wall takes only what the entries in front leave. False, with nothing emitted, when no plane of
@@ -230,8 +236,10 @@ class CoverageWalk {
     std::array<std::uint8_t, kMaxPlaneEntries> hidden_by;
     std::array<std::uint8_t, kMaxPlaneSurfaces> seen{};
     std::uint8_t most = 0;
+    // mutual_of[p]: the surfaces some entry of which lies behind p's plane: they hide none of p's entries.
+    std::array<std::uint16_t, kMaxPlaneSurfaces> mutual_of{};
     for (std::size_t p = 0; p < surfaces; ++p) {
-      std::uint16_t mutual = 0;  // the surfaces some entry of which lies behind p's plane: they hide none of p's
+      std::uint16_t& mutual = mutual_of[p];
       for (std::size_t q = 0; q < surfaces; ++q)
         if ((some_behind[q] >> p) & 1u) mutual |= std::uint16_t(1u << q);
       for (std::size_t k = run[p]; k < run[p + 1]; ++k) {
@@ -249,29 +257,60 @@ class CoverageWalk {
         runs_on = (seen[p] | seen[q]) == 3 && same_plane_keys(layer[run[p]], layer[run[q]]);
     }
     if (!runs_on) return false;
+    // seen_part[k]: the part of a hidden entry's coverage that its hiders do not cover in the image. It goes in the
+    // first round, side by side with the entries nobody hides, when they all fit in the pixel; the rest goes in the
+    // entry's own round. The geometry is asked only where the first round leaves room (at a wall's end, not along
+    // its foot), and no more once the seen parts overfill it (then none is taken).
+    std::array<double, kMaxPlaneEntries> seen_part;
+    std::fill_n(seen_part.begin(), n, 0.0);
+    double room = 1.0 + kLayerSlack;
+    for (std::size_t k = 0; k < n; ++k)
+      if (hidden_by[k] == 0) room -= layer[k].coverage;
+    if (room > 2.0 * kLayerSlack) {
+      bool fits = true;
+      for (std::size_t p = 0; p < surfaces && fits; ++p) {
+        for (std::size_t k = run[p]; k < run[p + 1] && fits; ++k) {
+          if (hidden_by[k] == 0) continue;
+          // The parts each hiding surface covers, added (two hiders may overlap: then more is taken as hidden).
+          double hidden = 0.0;
+          const std::uint16_t bits = behind_of[k] & ~mutual_of[p];
+          for (std::size_t q = 0; q < surfaces && hidden < 1.0; ++q)
+            if ((bits >> q) & 1u) hidden += order.hidden_part(layer[k].receiver, layer.subspan(run[q], run[q + 1] - run[q]));
+          seen_part[k] = layer[k].coverage * (1.0 - std::min(1.0, hidden));
+          room -= seen_part[k];
+          fits = room >= 0.0;
+        }
+      }
+      if (!fits) std::fill_n(seen_part.begin(), n, 0.0);
+    }
     const double open = 1.0 - covered_;
     double used = 0.0;  // the fraction of the layer's share the rounds so far took
     for (std::uint8_t round = 0; round <= most; ++round) {
+      // An entry's coverage in this round.
+      const auto part = [&](std::size_t k) {
+        if (round == 0) return hidden_by[k] == 0 ? layer[k].coverage : seen_part[k];
+        return hidden_by[k] == round ? layer[k].coverage - seen_part[k] : 0.0;
+      };
       double sum = 0.0;
       std::size_t count = 0;
       for (std::size_t k = 0; k < n; ++k) {
-        if (hidden_by[k] != round) continue;
-        sum += layer[k].coverage;
+        if (hidden_by[k] != round && !(round == 0 && seen_part[k] > 0.0)) continue;
+        sum += part(k);
         ++count;
       }
       if (count == 0) continue;
       if (sum <= 1.0 - used + kLayerSlack) {
         for (std::size_t k = 0; k < n; ++k)
-          if (hidden_by[k] == round) emit(layer[k].receiver, take(layer[k].coverage * open));
+          if (part(k) > 0.0) emit(layer[k].receiver, take(part(k) * open));
         used += sum;
-      } else if (used == 0.0) {
+      } else if (used == 0.0) {  // the first round overfilled, and so without seen parts
         const double before = covered_;
         overlapping(layer, emit, [&](std::size_t k) { return hidden_by[k] == round; });
         used = open > 0.0 ? (covered_ - before) / open : 1.0;
       } else {
         const double scale = std::max(0.0, 1.0 - used) / sum;  // sum > 1 - used >= 0
         for (std::size_t k = 0; k < n; ++k)
-          if (hidden_by[k] == round) emit(layer[k].receiver, take(layer[k].coverage * scale * open));
+          if (part(k) > 0.0) emit(layer[k].receiver, take(part(k) * scale * open));
         used = 1.0;
       }
     }
@@ -449,8 +488,12 @@ class CoverageArena {
       return;
     }
     CoverageWalk walk;
-    walk.walk(lists.reached(list_pixel, full_depth),
-              [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); }, order);
+    const auto emit_here = [&](std::uint32_t receiver, double visible) { emit(pixel, receiver, visible); };
+    if constexpr (Order::kActive) {
+      walk.walk(lists.reached(list_pixel, full_depth), emit_here, order.at(pixel));
+    } else {
+      walk.walk(lists.reached(list_pixel, full_depth), emit_here, order);
+    }
     if (full_depth != kFar) emit(pixel, full_receiver, walk.behind(1.0));
     lists.clear(list_pixel);
   }

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <span>
 #include <vector>
 
 namespace aarad::formfactor {
@@ -342,10 +343,19 @@ TEST(FormfactorCoverageList, AFullEntryBetweenTheDepthsOfOneSurfacesPiecesKeepsT
 struct FloorBehindTheWall {  // receiver 1 lies behind receiver 2's plane
   static constexpr bool kActive = true;
   bool operator()(std::uint32_t front, std::uint32_t back) const { return front == 2 && back == 1; }
+  double hidden_part(std::uint32_t, std::span<const CoverageEntry>) const { return 1.0; }
 };
 struct EachBehindTheOther {  // faces meeting at a convex edge
   static constexpr bool kActive = true;
   bool operator()(std::uint32_t front, std::uint32_t back) const { return front != back; }
+  double hidden_part(std::uint32_t, std::span<const CoverageEntry>) const { return 1.0; }
+};
+// Receivers 1 and 3 of the floor lie behind the plane of the wall, receiver 2; of 3, two thirds lie past the wall's
+// end in the image.
+struct FloorPastTheWallsEnd {
+  static constexpr bool kActive = true;
+  bool operator()(std::uint32_t front, std::uint32_t back) const { return front == 2 && (back == 1 || back == 3); }
+  double hidden_part(std::uint32_t back, std::span<const CoverageEntry>) const { return back == 3 ? 1.0 / 3.0 : 1.0; }
 };
 
 TEST(FormfactorCoverageList, APlaneOrderPutsTheFloorBehindAWallAfterIt) {
@@ -370,6 +380,23 @@ TEST(FormfactorCoverageList, APlaneOrderPutsTheFloorBehindAWallAfterIt) {
   // recurrence walks the layer as before.
   CoverageWalk().walk(list, [&](std::uint32_t r, double v) { ordered[r] = v; }, EachBehindTheOther{});
   EXPECT_EQ(ordered, plain);
+}
+
+// The wall's end in the pixel: of the floor behind the wall's plane, the part the wall does not cover in the image
+// lies side by side with the wall and the floor in front; the part it covers gets what they leave, here nothing.
+// Taken together in a later round, the two pieces behind shared what the wall left, 0.15 each: the piece hidden
+// behind the wall got light, and the piece past its end too little.
+TEST(FormfactorCoverageList, AFloorPiecePastTheWallsEndLiesBesideIt) {
+  const std::vector<CoverageEntry> list = {
+      {1.0, 0.4, 0, 0, 0.2f}, {1.0, 0.15, 1, 0, 0.2f}, {1.0, 0.45, 3, 0, 0.2f}, {1.05, 0.3, 2, 1, 0.0f}};
+  std::vector<double> got(4, 0.0);
+  CoverageWalk walk;
+  walk.walk(list, [&](std::uint32_t r, double v) { got[r] += v; }, FloorPastTheWallsEnd{});
+  EXPECT_DOUBLE_EQ(got[0], 0.4);
+  EXPECT_DOUBLE_EQ(got[1], 0.0);
+  EXPECT_DOUBLE_EQ(got[2], 0.3);
+  EXPECT_DOUBLE_EQ(got[3], 0.3);
+  EXPECT_DOUBLE_EQ(walk.covered(), 1.0);
 }
 
 // The floor's pieces cover the pixel, yet the wall standing on it keeps its entry: its depth range reaches into the

@@ -386,11 +386,12 @@ TEST(SolverFurnace, APartitionStandingOnTheFloorsInsideIsLitRight) {
   EXPECT_LT(fixed.area_rms, 0.02);
   options.adaptive = true;
   const FurnaceFigures adaptive = furnace_figures(options, partition_furnace());
-  // 0.129 measured, on the partition's foot (over); 0.148 before split leaves' pieces shared the earlier shots by
-  // their own factors (SolverHistory below); 0.179 (the foot's lowest leaves, under) before the walk ordered the
-  // foot's pixels by planes; 0.212 (at its ends) with the slivers along the foot; 70.6 before the cut. Area-weighted
-  // RMS 0.011 (0.013 before the pieces shared the earlier shots).
-  EXPECT_LT(adaptive.worst, 0.14);
+  // 0.073 measured; 0.129 (on the floor at the partition's ends, over) before the walk took the floor's parts past
+  // the partition's end beside it; 0.148 (on the partition's foot) before split leaves' pieces shared the earlier
+  // shots by their own factors (SolverHistory below); 0.179 (the foot's lowest leaves, under) before the walk ordered
+  // the foot's pixels by planes; 0.212 (at its ends) with the slivers along the foot; 70.6 before the cut.
+  // Area-weighted RMS 0.011 (0.013 before the pieces shared the earlier shots).
+  EXPECT_LT(adaptive.worst, 0.08);
   EXPECT_LT(adaptive.area_rms, 0.02);
 }
 
