@@ -52,6 +52,7 @@ struct PlaneOrder {
     const auto x = static_cast<double>(pixel / height), y = static_cast<double>(pixel % height);
     const std::array<Vec2, 4> square = {Vec2(x, y), Vec2(x + 1.0, y), Vec2(x + 1.0, y + 1.0), Vec2(x, y + 1.0)};
     (*project)(back, shape);
+    if (shape.size() < 3) return 1.0;  // nothing on this face: hidden, as the plane says
     const Box box = box_of(shape);
     if (box.x_min >= x && box.x_max <= x + 1.0 && box.y_min >= y && box.y_max <= y + 1.0) {
       in_pixel.assign(shape.begin(), shape.end());  // a piece inside the pixel (most are)
@@ -59,7 +60,7 @@ struct PlaneOrder {
       convex_intersection(square, shape, in_pixel, scratch);
     }
     const double area = in_pixel.size() >= 3 ? signed_area(in_pixel) : 0.0;
-    if (!(area > 0.0)) return 1.0;  // nothing to tell: hidden, as the plane says
+    if (!(area > 0.0)) return 1.0;  // no area in the pixel: hidden, as the plane says
     const Box inside = box_of(in_pixel);
     double hidden = 0.0;
     for (std::size_t i = 0; i < fronts.size() && hidden < area; ++i) {

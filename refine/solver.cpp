@@ -642,10 +642,13 @@ bool Solver::shoot(const PatchScan& scan) {
   largest_reflected_ = largest;
   ++shots_;
   last_shooter_ = shooter;
-
-  if (options_.adaptive) substructure(shooter, shot_flux);
+  // The shot is in every leaf by its own factor, and the earlier shots too (compute_form_factors moved them among
+  // the leaves made since the last shot): kept before substructuring, so that an exception there leaves them
+  // right for the next shot.
   shot_so_far_[shooter] += shot_flux;
   nodes_after_shot_[shooter] = static_cast<mesh::NodeId>(hierarchy_.node_count());
+
+  if (options_.adaptive) substructure(shooter, shot_flux);
   wait_for_row();
   return true;
 }
@@ -1000,7 +1003,6 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
       ff_.assign(cache_.size(), 0.0);
       compute_form_factors(shooter, subset_);
       share_out_split_factors(first_new);
-      if (!(history_flux_ == Rgb{})) share_out_history(subset_, piece_ancestor_);
     }
     start = Clock::now();
     take_back_split_shares(split_nodes, first_new, new_leaves, shot_flux);
@@ -1011,6 +1013,12 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
       factor_written_.push_back(leaf);
       receive(leaf, shot_flux * ff_[receiver], 1.0);
     }
+    // The new leaves' share of the shooter's earlier shots, once their B holds this shot's own share and not the
+    // one they inherited (a piece gives back at most what it has over its emission).
+    if (!subset_.empty() && !(history_flux_ == Rgb{})) share_out_history(subset_, piece_ancestor_);
+    // Every leaf now holds the shooter's shots by its own factors: after an exception in a later round, its next
+    // shot moves the earlier shots only among the leaves made since.
+    nodes_after_shot_[shooter] = static_cast<mesh::NodeId>(hierarchy_.node_count());
     candidates = steep_leaves_among(new_leaves);
   }
   times_.subdivision += seconds_since(start);
