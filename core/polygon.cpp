@@ -192,11 +192,6 @@ void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& 
   triangles.push_back({remaining[0], remaining[1], remaining[2]});
 }
 
-void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out) {
-  std::vector<Vec2> scratch;
-  convex_intersection(a, b, out, scratch);
-}
-
 void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out,
                          std::vector<Vec2>& scratch) {
   std::vector<Vec2>& current = out;
@@ -225,8 +220,8 @@ void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::
 }
 
 double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b) {
-  std::vector<Vec2> intersection;
-  convex_intersection(a, b, intersection);
+  std::vector<Vec2> intersection, scratch;
+  convex_intersection(a, b, intersection, scratch);
   return intersection.size() >= 3 ? std::max(0.0, signed_area(intersection)) : 0.0;
 }
 

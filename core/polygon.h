@@ -41,10 +41,9 @@ bool contains(std::span<const Vec2> polygon, const Vec2& p);
 // zero-area triangles are left for the caller to drop.
 void ear_clip(std::span<const Vec2> polygon, std::vector<std::array<std::size_t, 3>>& triangles);
 // The intersection of two convex polygons, both counter-clockwise (Sutherland-Hodgman, in doubles), into `out`
-// (fewer than 3 vertices, or points on a line, where they do not overlap); and its area. `b` needs 3 vertices or
-// more, and `out` and `scratch` must be other vectors than `a` and `b`.
-void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out);
-// The same with the caller's scratch buffer (no allocation once the buffers have grown).
+// (fewer than 3 vertices, or points on a line, where they do not overlap), with `scratch` as room (no allocation
+// once both have grown); and its area. `b` needs 3 vertices or more, and `out` and `scratch` must be other vectors
+// than `a` and `b`.
 void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out,
                          std::vector<Vec2>& scratch);
 double convex_intersection_area(std::span<const Vec2> a, std::span<const Vec2> b);

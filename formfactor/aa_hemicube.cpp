@@ -25,16 +25,13 @@ namespace {
 // pixel's square, and the areas of its intersections with each front added up. Areas add up over the pieces of a
 // split receiver, on either side, so a leaf's pieces are still hidden together as the leaf was (the factors a
 // reused row keeps stay those of a fresh shot).
-using detail::ProjectionCache;
-
 template <class Project>
 struct PlaneOrder {
   static constexpr bool kActive = true;
   const ReceiverView& receivers;
   Vec3 eye;
   const Project* project = nullptr;  // project(receiver, out)
-  std::vector<Vec2>* buffers = nullptr;  // five polygons' room
-  ProjectionCache* cache = nullptr;
+  detail::OrderBuffers* buffers = nullptr;
   std::size_t height = 1;  // pixels per column (the arena's pixel p is column p / height, row p % height)
   std::size_t pixel = 0;
 
@@ -45,10 +42,10 @@ struct PlaneOrder {
   }
 
   double hidden_part(std::uint32_t back, std::span<const CoverageEntry> fronts) const {
-    std::vector<Vec2>& shape = buffers[0];
-    std::vector<Vec2>& in_pixel = buffers[1];
-    std::vector<Vec2>& both = buffers[3];
-    std::vector<Vec2>& scratch = buffers[4];
+    std::vector<Vec2>& shape = buffers->back;
+    std::vector<Vec2>& in_pixel = buffers->in_pixel;
+    std::vector<Vec2>& both = buffers->both;
+    std::vector<Vec2>& scratch = buffers->scratch;
     const auto x = static_cast<double>(pixel / height), y = static_cast<double>(pixel % height);
     const std::array<Vec2, 4> square = {Vec2(x, y), Vec2(x + 1.0, y), Vec2(x + 1.0, y + 1.0), Vec2(x, y + 1.0)};
     (*project)(back, shape);
@@ -92,18 +89,18 @@ struct PlaneOrder {
 
   // A front receiver's projection, made once per pixel (a wall's few entries hide many pieces of a floor).
   std::span<const Vec2> projected(std::uint32_t receiver) const {
-    ProjectionCache& c = *cache;
+    detail::OrderBuffers& c = *buffers;
     if (c.pixel != pixel) {
       c.pixel = pixel;
-      c.receivers.clear();
+      c.fronts.clear();
       c.starts.assign(1, 0);
       c.points.clear();
     }
-    for (std::size_t i = 0; i < c.receivers.size(); ++i)
-      if (c.receivers[i] == receiver) return {c.points.data() + c.starts[i], c.starts[i + 1] - c.starts[i]};
-    std::vector<Vec2>& shape = buffers[2];
+    for (std::size_t i = 0; i < c.fronts.size(); ++i)
+      if (c.fronts[i] == receiver) return {c.points.data() + c.starts[i], c.starts[i + 1] - c.starts[i]};
+    std::vector<Vec2>& shape = c.front;
     (*project)(receiver, shape);
-    c.receivers.push_back(receiver);
+    c.fronts.push_back(receiver);
     c.points.insert(c.points.end(), shape.begin(), shape.end());
     c.starts.push_back(c.points.size());
     return {c.points.data() + c.starts[c.starts.size() - 2], shape.size()};
@@ -272,7 +269,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   // added to its total when the receiver changes: no chain of loads and stores through sums[] per pixel.
   std::uint32_t run_receiver = 0;
   double run_sum = 0.0;
-  b.order_cache.pixel = ProjectionCache::kNone;  // the last task's projections are not this one's
+  b.order.pixel = detail::OrderBuffers::kNoPixel;  // the last task's projections are not this one's
   arena.take_all(
       [&](std::size_t pixel, std::uint32_t receiver, double visible) {
         const double contribution = visible * weight[pixel];
@@ -284,7 +281,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
           run_sum += contribution;
         }
       },
-      PlaneOrder<decltype(project)>{receivers, eye_, &project, b.order.data(), &b.order_cache, column_height});
+      PlaneOrder<decltype(project)>{receivers, eye_, &project, &b.order, column_height});
   if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 

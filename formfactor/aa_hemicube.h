@@ -39,12 +39,14 @@
 namespace aarad::formfactor {
 
 namespace detail {
-// The plane order's projections of the front receivers of one pixel (aa_hemicube.cpp).
-struct ProjectionCache {
-  static constexpr std::size_t kNone = ~std::size_t{0};
-  std::size_t pixel = kNone;
-  std::vector<std::uint32_t> receivers;
-  std::vector<std::size_t> starts;  // receiver i's points: [starts[i], starts[i + 1])
+// The plane order's room (aa_hemicube.cpp): polygons in the task's pixel coordinates, and the projections of the
+// front receivers of one pixel.
+struct OrderBuffers {
+  static constexpr std::size_t kNoPixel = ~std::size_t{0};
+  std::vector<Vec2> back, in_pixel, front, both, scratch;
+  std::size_t pixel = kNoPixel;  // the pixel whose fronts are kept
+  std::vector<std::uint32_t> fronts;
+  std::vector<std::size_t> starts;  // front i's points: [starts[i], starts[i + 1])
   std::vector<Vec2> points;
 };
 }  // namespace detail
@@ -73,8 +75,7 @@ class AaHemicubeBackend final : public FormFactorBackend {
     StagedCoverageArena arena;
     std::vector<Vec3> local, scratch, clipped;  // a receiver in local coordinates; clipping buffers
     std::vector<Vec2> projected;
-    std::array<std::vector<Vec2>, 5> order;  // the plane order's polygons (aa_hemicube.cpp)
-    detail::ProjectionCache order_cache;
+    detail::OrderBuffers order;
   };
   // One task of a shot: every candidate, or for a subset (`tiles`: PreparedReceivers::subset_tiles) only those
   // whose box meets its tiles.

@@ -375,11 +375,10 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     history_pieces_.clear();
     history_ancestor_.clear();
     const auto add = [&](std::uint32_t receiver) {
-      mesh::NodeId ancestor = cache_.leaf(receiver);
-      if (ancestor < known) return;
-      while (ancestor >= known) ancestor = hierarchy_.parent(ancestor);
+      const mesh::NodeId leaf = cache_.leaf(receiver);
+      if (leaf < known) return;
       history_pieces_.push_back(receiver);
-      history_ancestor_.push_back(ancestor);
+      history_ancestor_.push_back(leaf_among_first(leaf, known));
     };
     if (row != nullptr) {
       for (const std::uint32_t receiver : shot) add(receiver);
@@ -859,8 +858,7 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
     receive(old_leaf, shot_flux * received_factor_[old_leaf], -1.0);
   }
   for (mesh::NodeId leaf : new_leaves) {
-    mesh::NodeId ancestor = leaf;  // the node that was a leaf when the shot was received
-    while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
+    const mesh::NodeId ancestor = leaf_among_first(leaf, first_new);  // the leaf when the shot was received
     const Rgb inherited_share = material(ancestor).reflectance * (shot_flux * received_factor_[ancestor]) /
                                 hierarchy_.area(ancestor);
     hierarchy_.radiosity(leaf) -= inherited_share;
@@ -879,6 +877,11 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
 // the balance holds through splits. Before, only the pieces of reshaped leaves and overlapping surfaces were: a rug
 // laid on the floor of a closed room lost 6.2 % of the emitted flux in its lamp's four shots, a box standing on the
 // floor made 3.6e-6 out of nothing, stairs against a wall 3.5e-5 (tests SolverEnergy.*ThroughSplits).
+mesh::NodeId Solver::leaf_among_first(mesh::NodeId node, mesh::NodeId count) const {
+  while (node >= count) node = hierarchy_.parent(node);
+  return node;
+}
+
 void Solver::sum_pieces(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors) {
   if (share_slot_.size() < hierarchy_.node_count()) share_slot_.resize(hierarchy_.node_count(), kNoSlot);
   share_total_.clear();
@@ -899,11 +902,8 @@ void Solver::share_out_split_factors(mesh::NodeId first_new) {
   if (subset_.empty()) return;
   // Per piece, the split leaf it comes from: the node that was a leaf when the shot was received.
   piece_ancestor_.resize(subset_.size());
-  for (std::size_t k = 0; k < subset_.size(); ++k) {
-    mesh::NodeId ancestor = cache_.leaf(subset_[k]);
-    while (ancestor >= first_new) ancestor = hierarchy_.parent(ancestor);
-    piece_ancestor_[k] = ancestor;
-  }
+  for (std::size_t k = 0; k < subset_.size(); ++k)
+    piece_ancestor_[k] = leaf_among_first(cache_.leaf(subset_[k]), first_new);
   sum_pieces(subset_, piece_ancestor_);
   for (std::size_t k = 0; k < subset_.size(); ++k) {
     const std::uint32_t receiver = subset_[k];

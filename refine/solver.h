@@ -231,6 +231,9 @@ class Solver {
   void record_shot_factors();
   void take_back_split_shares(std::span<const mesh::NodeId> split_nodes, mesh::NodeId first_new,
                               std::span<const mesh::NodeId> new_leaves, const Rgb& shot_flux);
+  // The node or ancestor of `node` that was a leaf when the hierarchy had `count` nodes (node ids only grow, and a
+  // split leaf's pieces come after it).
+  mesh::NodeId leaf_among_first(mesh::NodeId node, mesh::NodeId count) const;
   // Per ancestor of `pieces` (receivers, with their ancestors), a slot in share_slot_ holding the pieces' total
   // factor (from ff_) and area in share_total_ and share_area_, summed in the pieces' order. The caller puts the
   // ancestors' slots back to kNoSlot.
