@@ -15,22 +15,26 @@ namespace {
 
 // The plane order of the coverage walk's overfilled layers (coverage_list.h, CoverageWalk): receiver `back` lies
 // behind receiver `front`'s plane, seen from the shooting point, when every corner of it is on the far side of that
-// plane or on it, and some corner strictly behind. "On" allows for the rounding of a corner computed on the plane
-// (the points where a floor is cut along a wall's foot): 1e-12 of the coordinates' and the plane offset's size, some
-// four thousand units in the last place, yet only 1e-5 for a scene 1e7 from the origin (1e-10 gave the same numbers
-// in the partition furnace and in a furnace room with a box turned by 0.35 rad standing on its floor).
+// plane or on it, and some corner strictly behind; across it when some corners lie strictly on either side. "On"
+// allows for the rounding of a corner computed on the plane (the points where a floor is cut along a wall's foot):
+// 1e-12 of the coordinates' and the plane offset's size, some four thousand units in the last place, yet only 1e-5
+// for a scene 1e7 from the origin (1e-10 gave the same numbers in the partition furnace and in a furnace room with
+// a box turned by 0.35 rad standing on its floor).
 //
-// The part of `back` in a pixel that `fronts` cover in the image (hidden_part): the receivers are projected as the
-// task rasterized them (`project`, into the task's pixel coordinates, counter-clockwise), `back` clipped to the
-// pixel's square, and the areas of its intersections with each front added up. Areas add up over the pieces of a
-// split receiver, on either side, so a leaf's pieces are still hidden together as the leaf was (the factors a
-// reused row keeps stay those of a fresh shot).
-template <class Project>
+// The parts of `back` in a pixel are areas in the image: the receivers are projected as the task rasterized them
+// (`project`, into the task's pixel coordinates, counter-clockwise) and `back` clipped to the pixel's square. A cell
+// of it (cell_part) is that polygon cut by the lines where the planes meet back's plane in the image (where the two
+// planes' 1 / depth, affine in pixel coordinates, are equal); the part of a cell that `fronts` cover (hidden_part)
+// adds up the areas of its intersections with each front. Areas add up over the pieces
+// of a split receiver, on either side, and a cell of a leaf is made of the same cells of its pieces, so a leaf's
+// pieces are still hidden together as the leaf was (the factors a reused row keeps stay those of a fresh shot).
+template <class Project, class DepthOf>
 struct PlaneOrder {
   static constexpr bool kActive = true;
   const ReceiverView& receivers;
   Vec3 eye;
-  const Project* project = nullptr;  // project(receiver, out)
+  const Project* project = nullptr;             // project(receiver, out)
+  const DepthOf* depth_of = nullptr;  // depth_of(receiver): 1 / depth of its plane in the task's pixel coordinates
   detail::OrderBuffers* buffers = nullptr;
   std::size_t height = 1;  // pixels per column (the arena's pixel p is column p / height, row p % height)
   std::size_t pixel = 0;
@@ -41,32 +45,112 @@ struct PlaneOrder {
     return bound;
   }
 
-  double hidden_part(std::uint32_t back, std::span<const CoverageEntry> fronts) const {
-    std::vector<Vec2>& shape = buffers->back;
-    std::vector<Vec2>& in_pixel = buffers->in_pixel;
-    std::vector<Vec2>& both = buffers->both;
-    std::vector<Vec2>& scratch = buffers->scratch;
+  // `shape` clipped to the pixel's square, into buffers->in_pixel; returns its area.
+  double in_pixel(std::span<const Vec2> shape) const {
+    std::vector<Vec2>& out = buffers->in_pixel;
     const auto x = static_cast<double>(pixel / height), y = static_cast<double>(pixel % height);
     const std::array<Vec2, 4> square = {Vec2(x, y), Vec2(x + 1.0, y), Vec2(x + 1.0, y + 1.0), Vec2(x, y + 1.0)};
-    (*project)(back, shape);
-    if (shape.size() < 3) return 1.0;  // nothing on this face: hidden, as the plane says
     const Box box = box_of(shape);
     if (box.x_min >= x && box.x_max <= x + 1.0 && box.y_min >= y && box.y_max <= y + 1.0) {
-      in_pixel.assign(shape.begin(), shape.end());  // a piece inside the pixel (most are)
+      out.assign(shape.begin(), shape.end());  // a piece inside the pixel (most are)
     } else {
-      convex_intersection(square, shape, in_pixel, scratch);
+      convex_intersection(square, shape, out, buffers->scratch);
     }
-    const double area = in_pixel.size() >= 3 ? signed_area(in_pixel) : 0.0;
-    if (!(area > 0.0)) return 1.0;  // no area in the pixel: hidden, as the plane says
-    const Box inside = box_of(in_pixel);
+    return out.size() >= 3 ? signed_area(out) : 0.0;
+  }
+
+  // Receiver `back` in the pixel: its area there, its polygon there in buffers->whole (kept for the pixel and the
+  // receiver last asked about: a receiver's cells and hidden parts are asked in turn).
+  double whole_in_pixel(std::uint32_t back) const {
+    detail::OrderBuffers& c = *buffers;
+    if (c.whole_pixel == pixel && c.whole_receiver == back) return c.whole_area;
+    (*project)(back, c.back);
+    c.whole_area = c.back.size() >= 3 ? in_pixel(c.back) : 0.0;
+    c.whole.assign(c.in_pixel.begin(), c.in_pixel.end());
+    c.whole_pixel = pixel;
+    c.whole_receiver = back;
+    return c.whole_area;
+  }
+
+  // Receiver `back`'s cell (coverage_list.h, "What the walk knows") in the pixel: its area, its polygon in `cell`;
+  // the area of the whole receiver in the pixel in `whole` (0 when it has none: then the cell is empty). A point of
+  // `back` seen through pixel point (x, y) lies in front of plane h (on the shooting point's side) where it is
+  // nearer along that ray than h's plane: where 1 / depth of back's plane exceeds h's. 1 / depth is affine in
+  // pixel coordinates, so the cell is the receiver's part in the pixel clipped by lines.
+  double cell_in_pixel(std::uint32_t back, std::span<const std::uint32_t> behind,
+                       std::span<const std::uint32_t> in_front, double& whole, std::span<const Vec2>& cell) const {
+    whole = whole_in_pixel(back);
+    cell = buffers->whole;
+    if (!(whole > 0.0)) return 0.0;
+    if (behind.empty() && in_front.empty()) return whole;
+    std::vector<Vec2>& a = buffers->cell;
+    std::vector<Vec2>& b = buffers->cell_next;
+    a.assign(buffers->whole.begin(), buffers->whole.end());
+    const InverseDepth own = (*depth_of)(back);
+    const auto keep = [&](std::uint32_t h, double side) {
+      const InverseDepth other = (*depth_of)(h);
+      clip_to_line(a, side * (own.alpha - other.alpha), side * (own.beta - other.beta),
+                   side * (own.gamma - other.gamma), b);
+      a.swap(b);
+      return a.size() >= 3;
+    };
+    bool left = true;
+    for (std::size_t i = 0; i < behind.size() && left; ++i) left = keep(behind[i], -1.0);
+    for (std::size_t i = 0; i < in_front.size() && left; ++i) left = keep(in_front[i], 1.0);
+    cell = a;
+    return left ? std::max(0.0, signed_area(a)) : 0.0;
+  }
+
+  // The part of convex `polygon` where a x + b y + c >= 0, into `out`; points within a rounding of the line are on
+  // it (an edge of no length has no side for a later clip).
+  static void clip_to_line(std::span<const Vec2> polygon, double a, double b, double c, std::vector<Vec2>& out) {
+    out.clear();
+    if (polygon.empty()) return;
+    double size = std::abs(c);
+    for (const Vec2& p : polygon) size = std::max(size, std::abs(a * p.x) + std::abs(b * p.y));
+    const double on = 1e-12 * size;
+    const auto value = [&](const Vec2& p) {
+      const double v = a * p.x + b * p.y + c;
+      return std::abs(v) <= on ? 0.0 : v;
+    };
+    Vec2 previous = polygon.back();
+    double previous_value = value(previous);
+    for (const Vec2& current : polygon) {
+      const double v = value(current);
+      if ((previous_value < 0.0 && v > 0.0) || (previous_value > 0.0 && v < 0.0))
+        out.push_back(previous + (current - previous) * (previous_value / (previous_value - v)));
+      if (v >= 0.0) out.push_back(current);
+      previous = current;
+      previous_value = v;
+    }
+  }
+
+  double cell_part(std::uint32_t back, std::span<const std::uint32_t> behind,
+                   std::span<const std::uint32_t> in_front) const {
+    double whole = 0.0;
+    std::span<const Vec2> unused;
+    const double cell = cell_in_pixel(back, behind, in_front, whole, unused);
+    // No area in the pixel: behind, as the planes say.
+    if (!(whole > 0.0)) return behind.empty() ? 0.0 : (in_front.empty() ? 1.0 : 0.0);
+    return std::clamp(cell / whole, 0.0, 1.0);
+  }
+
+  double hidden_part(std::uint32_t back, std::span<const std::uint32_t> behind, std::span<const std::uint32_t> in_front,
+                     std::span<const CoverageEntry> fronts) const {
+    double whole = 0.0;
+    std::span<const Vec2> cell;
+    const double area = cell_in_pixel(back, behind, in_front, whole, cell);
+    if (!(whole > 0.0)) return 1.0;  // no area in the pixel: hidden, as the planes say
+    if (!(area > 0.0)) return 0.0;
+    const Box inside = box_of(cell);
     double hidden = 0.0;
     for (std::size_t i = 0; i < fronts.size() && hidden < area; ++i) {
       const std::span<const Vec2> front_shape = projected(fronts[i].receiver);
       if (front_shape.size() < 3 || !inside.meets(box_of(front_shape))) continue;
-      convex_intersection(in_pixel, front_shape, both, scratch);
-      if (both.size() >= 3) hidden += std::max(0.0, signed_area(both));
+      convex_intersection(cell, front_shape, buffers->both, buffers->scratch);
+      if (buffers->both.size() >= 3) hidden += std::max(0.0, signed_area(buffers->both));
     }
-    return std::min(1.0, hidden / area);
+    return std::min(area, hidden) / whole;
   }
 
   struct Box {
@@ -106,18 +190,19 @@ struct PlaneOrder {
     return {c.points.data() + c.starts[c.starts.size() - 2], shape.size()};
   }
 
-  bool operator()(std::uint32_t front, std::uint32_t back) const {
+  PlaneSide side(std::uint32_t front, std::uint32_t back) const {
     const Plane& plane = receivers.plane(front);
-    if (!(plane.signed_distance(eye) > 0.0)) return false;  // seen edge on: nothing lies behind it
-    bool strictly = false;
+    if (!(plane.signed_distance(eye) > 0.0)) return PlaneSide::kNotBehind;  // seen edge on: nothing lies behind it
+    bool behind = false, in_front = false;
     for (const Vec3& corner : receivers.polygon(back)) {
       const double distance = plane.signed_distance(corner);
       const double on = 1e-12 * (std::max({std::abs(corner.x), std::abs(corner.y), std::abs(corner.z)}) +
                                  std::abs(plane.d));
-      if (distance > on) return false;
-      strictly = strictly || distance < -on;
+      in_front = in_front || distance > on;
+      behind = behind || distance < -on;
+      if (in_front && behind) break;
     }
-    return strictly;
+    return !behind ? PlaneSide::kNotBehind : in_front ? PlaneSide::kAcross : PlaneSide::kBehind;
   }
 };
 
@@ -192,6 +277,12 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       return;
     out.assign(b.projected.begin(), b.projected.begin() + static_cast<std::ptrdiff_t>(m));
     if (signed_area(out) < 0.0) std::reverse(out.begin(), out.end());
+  };
+  // 1 / depth of receiver i's plane on this face, in the task's pixel coordinates (as offer() keys it).
+  const auto depth_of = [&](std::uint32_t i) {
+    InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
+    depth.gamma += depth.alpha * shift;
+    return depth;
   };
   // A re-shot subset: only the pixels its receivers may cover matter.
   const bool masked = tiles != nullptr;
@@ -270,6 +361,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   std::uint32_t run_receiver = 0;
   double run_sum = 0.0;
   b.order.pixel = detail::OrderBuffers::kNoPixel;  // the last task's projections are not this one's
+  b.order.whole_pixel = detail::OrderBuffers::kNoPixel;
   arena.take_all(
       [&](std::size_t pixel, std::uint32_t receiver, double visible) {
         const double contribution = visible * weight[pixel];
@@ -281,7 +373,8 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
           run_sum += contribution;
         }
       },
-      PlaneOrder<decltype(project)>{receivers, eye_, &project, &b.order, column_height});
+      PlaneOrder<decltype(project), decltype(depth_of)>{receivers, eye_, &project, &depth_of, &b.order,
+                                                        column_height});
   if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 

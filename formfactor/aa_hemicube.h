@@ -48,6 +48,12 @@ struct OrderBuffers {
   std::vector<std::uint32_t> fronts;
   std::vector<std::size_t> starts;  // front i's points: [starts[i], starts[i + 1])
   std::vector<Vec2> points;
+  std::vector<Vec2> cell, cell_next;  // a receiver's part in a pixel cut by planes (a cell of it)
+  // The receiver last measured in a pixel: the pixel, the receiver, its part in the pixel and that part's area.
+  std::size_t whole_pixel = kNoPixel;
+  std::uint32_t whole_receiver = 0;
+  std::vector<Vec2> whole;
+  double whole_area = 0.0;
 };
 }  // namespace detail
 

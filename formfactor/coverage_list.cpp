@@ -25,15 +25,6 @@ std::uint32_t PartialLists::allocate(std::uint32_t capacity) {
   return list;
 }
 
-// Whether `entry` lies wholly behind the covering group whose head is `full`: its depth range starts behind the
-// group's, or it lies in the group's plane (coplanar surfaces, which the group's pieces cover). An entry whose range
-// reaches into the group's may lie in front of part of it, where a surface of the group runs on behind another
-// (coverage_list.h, "A full pixel"), and is kept for the walk.
-static bool hidden_by_full_group(const CoverageEntry& full, const CoverageEntry& entry) {
-  const double far = full.depth + full.spread;
-  return !(entry.depth - entry.spread <= far + kLayerTouch * std::abs(far)) || same_plane_keys(entry, full);
-}
-
 bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) {
   Cell* cells = &pool_[list];
   const std::uint32_t count = cells[0].header.count;
@@ -110,6 +101,7 @@ void CoverageArena::reset(std::size_t pixels) {
   if (depth_.size() < pixels) {
     depth_.resize(pixels, kFar);
     receiver_.resize(pixels, 0);
+    full_meta_.resize(pixels);
   }
   lists_.reset(pixels);
   pixels_ = pixels;
@@ -129,6 +121,7 @@ void StagedCoverageArena::reset(int width, int height) {
   if (depth_.size() < pixels + 2 * height) {
     depth_.resize(pixels + 2 * height, kFar);
     receiver_.resize(pixels + 2 * height, 0);
+    full_meta_.resize(pixels + 2 * height);
     surface_.resize(pixels + 2 * height, kNoPartial);
   }
   // Blocks of 2^k whole columns, as many as fit in kBlockPixels (at least one column).

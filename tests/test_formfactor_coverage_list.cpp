@@ -342,20 +342,38 @@ TEST(FormfactorCoverageList, AFullEntryBetweenTheDepthsOfOneSurfacesPiecesKeepsT
 // told that the floor behind lies behind the wall's plane, the floor in front and the wall share the pixel.
 struct FloorBehindTheWall {  // receiver 1 lies behind receiver 2's plane
   static constexpr bool kActive = true;
-  bool operator()(std::uint32_t front, std::uint32_t back) const { return front == 2 && back == 1; }
-  double hidden_part(std::uint32_t, std::span<const CoverageEntry>) const { return 1.0; }
+  PlaneSide side(std::uint32_t front, std::uint32_t back) const {
+    return front == 2 && back == 1 ? PlaneSide::kBehind : PlaneSide::kNotBehind;
+  }
+  double cell_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>) const { return 1.0; }
+  double hidden_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>,
+                     std::span<const CoverageEntry>) const {
+    return 1.0;
+  }
 };
 struct EachBehindTheOther {  // faces meeting at a convex edge
   static constexpr bool kActive = true;
-  bool operator()(std::uint32_t front, std::uint32_t back) const { return front != back; }
-  double hidden_part(std::uint32_t, std::span<const CoverageEntry>) const { return 1.0; }
+  PlaneSide side(std::uint32_t front, std::uint32_t back) const {
+    return front != back ? PlaneSide::kBehind : PlaneSide::kNotBehind;
+  }
+  double cell_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>) const { return 1.0; }
+  double hidden_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>,
+                     std::span<const CoverageEntry>) const {
+    return 1.0;
+  }
 };
 // Receivers 1 and 3 of the floor lie behind the plane of the wall, receiver 2; of 3, two thirds lie past the wall's
 // end in the image.
 struct FloorPastTheWallsEnd {
   static constexpr bool kActive = true;
-  bool operator()(std::uint32_t front, std::uint32_t back) const { return front == 2 && (back == 1 || back == 3); }
-  double hidden_part(std::uint32_t back, std::span<const CoverageEntry>) const { return back == 3 ? 1.0 / 3.0 : 1.0; }
+  PlaneSide side(std::uint32_t front, std::uint32_t back) const {
+    return front == 2 && (back == 1 || back == 3) ? PlaneSide::kBehind : PlaneSide::kNotBehind;
+  }
+  double cell_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>) const { return 1.0; }
+  double hidden_part(std::uint32_t back, std::span<const std::uint32_t>, std::span<const std::uint32_t>,
+                     std::span<const CoverageEntry>) const {
+    return back == 3 ? 1.0 / 3.0 : 1.0;
+  }
 };
 
 TEST(FormfactorCoverageList, APlaneOrderPutsTheFloorBehindAWallAfterIt) {
@@ -397,6 +415,89 @@ TEST(FormfactorCoverageList, AFloorPiecePastTheWallsEndLiesBesideIt) {
   EXPECT_DOUBLE_EQ(got[2], 0.3);
   EXPECT_DOUBLE_EQ(got[3], 0.3);
   EXPECT_DOUBLE_EQ(walk.covered(), 1.0);
+}
+
+// A floor piece across the wall's plane (receiver 1: two thirds of it behind the plane, hidden by the wall, one
+// third in front) gets what its two parts would get as pieces of their own, cut at the plane (receivers 3 in front
+// and 4 behind): the walk cuts it by Order::cell_part. Taken whole, it was not behind the wall's plane, and the
+// walk by planes left the pixel to the recurrence (the wall's foot then got nothing), while its pieces were ordered.
+struct FloorAcrossTheWallsPlane {
+  static constexpr bool kActive = true;
+  PlaneSide side(std::uint32_t front, std::uint32_t back) const {
+    if (front != 2) return PlaneSide::kNotBehind;
+    return back == 1 ? PlaneSide::kAcross : back == 4 ? PlaneSide::kBehind : PlaneSide::kNotBehind;
+  }
+  double cell_part(std::uint32_t back, std::span<const std::uint32_t> behind, std::span<const std::uint32_t>) const {
+    EXPECT_EQ(back, 1u);
+    return behind.empty() ? 1.0 / 3.0 : 2.0 / 3.0;
+  }
+  double hidden_part(std::uint32_t back, std::span<const std::uint32_t> behind, std::span<const std::uint32_t>,
+                     std::span<const CoverageEntry>) const {
+    return back == 1 && !behind.empty() ? 2.0 / 3.0 : 1.0;  // of receiver 1, its part behind is all hidden
+  }
+};
+
+TEST(FormfactorCoverageList, AFloorPieceAcrossTheWallsPlaneIsCutThere) {
+  const std::vector<CoverageEntry> across = {{1.0, 0.4, 0, 0, 0.2f}, {1.0, 0.6, 1, 0, 0.2f}, {1.05, 0.4, 2, 1, 0.0f}};
+  const std::vector<CoverageEntry> cut = {
+      {1.0, 0.4, 0, 0, 0.2f}, {1.0, 0.2, 3, 0, 0.2f}, {1.0, 0.4, 4, 0, 0.2f}, {1.05, 0.4, 2, 1, 0.0f}};
+  std::vector<double> whole(5, 0.0), pieces(5, 0.0);
+  CoverageWalk walk, cut_walk;
+  walk.walk(across, [&](std::uint32_t r, double v) { whole[r] += v; }, FloorAcrossTheWallsPlane{});
+  cut_walk.walk(cut, [&](std::uint32_t r, double v) { pieces[r] += v; }, FloorAcrossTheWallsPlane{});
+  EXPECT_DOUBLE_EQ(pieces[0], 0.4);
+  EXPECT_DOUBLE_EQ(pieces[3], 0.2);
+  EXPECT_DOUBLE_EQ(pieces[4], 0.0);
+  EXPECT_DOUBLE_EQ(pieces[2], 0.4);
+  EXPECT_DOUBLE_EQ(whole[0], pieces[0]);
+  EXPECT_DOUBLE_EQ(whole[1], pieces[3] + pieces[4]);
+  EXPECT_DOUBLE_EQ(whole[2], pieces[2]);
+  EXPECT_DOUBLE_EQ(walk.covered(), 1.0);
+}
+
+// A wall whose one leaf covers the pixel (a full entry, kept inline) stands on the floor: the floor in front of it
+// (receiver 0) and behind it (1) share one key, in front of the wall's. The full entry is walked among the entries
+// whose ranges reach its own, as the wall's pieces would be (receivers 2 and 3, covering the pixel together): the
+// floor in front and the wall's foot share the pixel, the floor behind gets nothing. Walked behind the list, the
+// wall got nothing and the floor behind the rest of the pixel.
+struct FloorBehindTheWallsPieces {
+  static constexpr bool kActive = true;
+  PlaneSide side(std::uint32_t front, std::uint32_t back) const {
+    return (front == 2 || front == 3) && back == 1 ? PlaneSide::kBehind : PlaneSide::kNotBehind;
+  }
+  double cell_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>) const { return 1.0; }
+  double hidden_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>,
+                     std::span<const CoverageEntry>) const {
+    return 1.0;
+  }
+  FloorBehindTheWallsPieces at(std::size_t) const { return *this; }
+};
+
+TEST(FormfactorCoverageList, AFullEntryIsWalkedAsItsPiecesWouldBe) {
+  const CoverageEntry front{1.0, 0.4, 0, 0, 0.2f}, behind{1.0, 0.6, 1, 0, 0.2f};
+  std::vector<double> whole(4, 0.0), pieces(4, 0.0);
+  CoverageArena arena;
+  arena.reset(1);
+  EXPECT_TRUE(arena.insert(0, {1.05, 1.0, 2, 1, 0.1f}));  // the wall's leaf, covering the pixel
+  EXPECT_TRUE(arena.insert(0, front));
+  EXPECT_TRUE(arena.insert(0, behind));
+  arena.take_all([&](std::size_t, std::uint32_t r, double v) { whole[r] += v; }, FloorBehindTheWallsPieces{});
+  arena.reset(1);
+  EXPECT_TRUE(arena.insert(0, {1.05, 0.5, 2, 1, 0.1f}));  // the wall's leaf in two pieces
+  EXPECT_TRUE(arena.insert(0, {1.05, 0.5, 3, 1, 0.1f}));
+  EXPECT_TRUE(arena.insert(0, front));
+  EXPECT_TRUE(arena.insert(0, behind));
+  arena.take_all([&](std::size_t, std::uint32_t r, double v) { pieces[r] += v; }, FloorBehindTheWallsPieces{});
+  EXPECT_DOUBLE_EQ(pieces[0], 0.4);
+  EXPECT_DOUBLE_EQ(pieces[1], 0.0);
+  EXPECT_DOUBLE_EQ(pieces[2] + pieces[3], 0.6);
+  EXPECT_DOUBLE_EQ(whole[0], pieces[0]);
+  EXPECT_DOUBLE_EQ(whole[1], pieces[1]);
+  EXPECT_DOUBLE_EQ(whole[2], pieces[2] + pieces[3]);
+  // A floor entry wholly behind the full entry's range is refused, as behind a covering group.
+  arena.reset(1);
+  EXPECT_TRUE(arena.insert(0, {1.05, 1.0, 2, 1, 0.1f}));
+  EXPECT_FALSE(arena.insert(0, {1.5, 0.5, 4, 2, 0.1f}));
 }
 
 // The floor's pieces cover the pixel, yet the wall standing on it keeps its entry: its depth range reaches into the
