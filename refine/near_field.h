@@ -35,7 +35,8 @@
 // that sees mostly its near field), the near receivers are instead scaled to the total the back end gave them,
 // and the far ones are left alone. Receivers added by substructuring in the same shot are scaled like those of
 // the whole shot; the solver then scales the pieces of each split receiver so that they share what it had
-// received (refine/solver.cpp), which keeps the balance through splits too.
+// received, except where every piece was reshaped here: those keep their own factors, and the shooter keeps the
+// difference as unshot flux (refine/solver.cpp). Either way the balance holds through splits.
 #pragma once
 
 #include "core/math.h"

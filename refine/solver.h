@@ -235,12 +235,14 @@ class Solver {
   // split leaf's pieces come after it).
   mesh::NodeId leaf_among_first(mesh::NodeId node, mesh::NodeId count) const;
   // Per ancestor of `pieces` (receivers, with their ancestors), a slot in share_slot_ holding the pieces' total
-  // factor (from ff_) and area in share_total_ and share_area_, summed in the pieces' order. The caller puts the
-  // ancestors' slots back to kNoSlot.
+  // factor (from ff_) and area in share_total_ and share_area_, summed in the pieces' order, and the ancestor in
+  // share_leaf_. The caller puts the ancestors' slots back to kNoSlot.
   void sum_pieces(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors);
   // After the near-field correction: scales the new leaves of every split leaf so that together they get the factor
-  // it had received.
-  void share_out_split_factors(mesh::NodeId first_new);
+  // it had received. With keep_reshaped (a shot's own substructuring), the pieces of a leaf that the correction
+  // reshaped all keep their own factors instead; returns what those leaves had over their pieces' total, which
+  // the caller gives back to the shooter (see solver.cpp).
+  double share_out_split_factors(mesh::NodeId first_new, bool keep_reshaped);
   // Moves the shooter's earlier shots (history_flux_) among the pieces of each leaf split since it last shot, by
   // their factors of this shot in ff_ (see solver.cpp).
   void share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors);
@@ -281,11 +283,15 @@ class Solver {
   // factors are copied in from ff_ then (record_shot_factors), not by every shot's deposit loop.
   std::vector<double> received_factor_;
   // share_out_split_factors' and share_out_history's work: per piece of the subset its split leaf; per node a split
-  // leaf's slot (kNoSlot between calls); per slot the pieces' total factor and area (sum_pieces).
+  // leaf's slot (kNoSlot between calls); per slot the pieces' total factor and area, and the leaf (sum_pieces).
   static constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<mesh::NodeId> piece_ancestor_;
   std::vector<std::uint32_t> share_slot_;
   std::vector<double> share_total_, share_area_;
+  std::vector<mesh::NodeId> share_leaf_;
+  // share_out_split_factors(keep_reshaped): per receiver, 1 while the near-field correction reshaped it (0 between
+  // calls); per slot, 1 when the pieces keep their own factors.
+  std::vector<std::uint8_t> reshaped_flag_, share_own_;
   // share_out_history's state: per patch (by NodeId) the flux it has shot so far and the hierarchy's node count
   // after its last shot; the current shooter's flux before this shot; scratch: the pieces, their ancestors, their
   // changes of B, and per ancestor's slot the part of the changes applied.
