@@ -127,6 +127,24 @@ struct PlaneOrder {
 
   double cell_part(std::uint32_t back, std::span<const std::uint32_t> behind,
                    std::span<const std::uint32_t> in_front) const {
+    // Where no plane's line crosses the pixel's square, the cell is the whole entry or nothing, whatever its shape
+    // in the pixel (most entries across a plane lie across it elsewhere).
+    const auto x = static_cast<double>(pixel / height), y = static_cast<double>(pixel % height);
+    const InverseDepth own = (*depth_of)(back);
+    bool crossed = false, outside = false;
+    const auto side_of_square = [&](std::uint32_t h, double side) {
+      const InverseDepth other = (*depth_of)(h);
+      const double a = side * (own.alpha - other.alpha), b = side * (own.beta - other.beta),
+                   c = side * (own.gamma - other.gamma);
+      const double low = c + a * x + b * y + std::min(a, 0.0) + std::min(b, 0.0);
+      const double high = c + a * x + b * y + std::max(a, 0.0) + std::max(b, 0.0);
+      if (high < 0.0) outside = true;
+      else if (low < 0.0) crossed = true;
+    };
+    for (const std::uint32_t h : behind) side_of_square(h, -1.0);
+    for (const std::uint32_t h : in_front) side_of_square(h, 1.0);
+    if (outside) return 0.0;
+    if (!crossed) return 1.0;
     double whole = 0.0;
     std::span<const Vec2> unused;
     const double cell = cell_in_pixel(back, behind, in_front, whole, unused);
@@ -291,6 +309,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     return;
   }
   b.arena.reset(width, height);
+  b.arena.describe_receivers(receivers.size());
 
   for (const std::uint32_t i : candidates) {
     const std::size_t m = place(i);
@@ -309,6 +328,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     // One float up (a non-negative finite float's next is its bit pattern plus one: std::nextafter toward
     // infinity, without the library call per receiver).
     if (spread < reach) spread = std::bit_cast<float>(std::bit_cast<std::uint32_t>(spread) + 1u);
+    arena.describe(receiver, spread, surface);
     // Offers the receiver's entry for pixel (x, y); returns its coverage as the walk will see it.
     const auto offer = [&](int x, int y, double coverage) {
       // The half row of a side face (odd N) lies half inside the face: its pixel is that inside half, so that

@@ -121,7 +121,6 @@ void StagedCoverageArena::reset(int width, int height) {
   if (depth_.size() < pixels + 2 * height) {
     depth_.resize(pixels + 2 * height, kFar);
     receiver_.resize(pixels + 2 * height, 0);
-    full_meta_.resize(pixels + 2 * height);
     surface_.resize(pixels + 2 * height, kNoPartial);
   }
   // Blocks of 2^k whole columns, as many as fit in kBlockPixels (at least one column).

@@ -609,7 +609,7 @@ class CoverageArena {
   void take_all(Emit&& emit, const Order& order = {}) {
     for (std::size_t p = 0; p < pixels_; ++p) {
       if (p + 16 < pixels_) lists_.prefetch(p + 16);
-      take_pixel(p, full_entry(p), lists_, p, merged_, emit, order);
+      take_pixel(p, depth_[p], receiver_[p], [&] { return full_entry(p); }, lists_, p, merged_, emit, order);
       depth_[p] = kFar;
     }
     lists_.mark_clean();
@@ -629,17 +629,19 @@ class CoverageArena {
   // Entries offered since the last reset (accepted or not).
   std::size_t entries() const { return entries_; }
 
-  // The full entry of a pixel and the list `list_pixel` of `lists`: calls emit(pixel, receiver, E) front to back
-  // and clears the list. Shared with StagedCoverageArena.
-  template <class Emit, class Order = NoPlaneOrder>
-  static void take_pixel(std::size_t pixel, const CoverageEntry& full, PartialLists& lists, std::size_t list_pixel,
-                         std::vector<CoverageEntry>& merged, Emit& emit, const Order& order = {}) {
+  // The pixel's full entry (depth `full_depth`, kFar when none; full() makes it an entry, asked only when the pixel
+  // has a list) and the list `list_pixel` of `lists`: calls emit(pixel, receiver, E) front to back and clears the
+  // list. Shared with StagedCoverageArena.
+  template <class Full, class Emit, class Order = NoPlaneOrder>
+  static void take_pixel(std::size_t pixel, double full_depth, std::uint32_t full_receiver, const Full& full,
+                         PartialLists& lists, std::size_t list_pixel, std::vector<CoverageEntry>& merged, Emit& emit,
+                         const Order& order = {}) {
     if (lists.empty(list_pixel)) {
-      if (full.depth != kFar) emit(pixel, full.receiver, 1.0);  // a lone full entry: E = 1
+      if (full_depth != kFar) emit(pixel, full_receiver, 1.0);  // a lone full entry: E = 1
       return;
     }
     CoverageWalk walk;
-    walk_pixel(pixel, full, lists, list_pixel, merged, walk, emit, order);
+    walk_pixel(pixel, full(), lists, list_pixel, merged, walk, emit, order);
     lists.clear(list_pixel);
   }
 
@@ -753,6 +755,16 @@ class StagedCoverageArena {
   // Empties the arena (O(1) after take_all) for a width x height face; keeps all memory.
   void reset(int width, int height);
 
+  // The spread and surface of `receiver`'s entries on this face, which its full entries take from here (a full
+  // entry keeps only its depth and receiver per pixel): to be given before its entries are offered, for receivers
+  // numbered below the count given to describe_receivers.
+  void describe_receivers(std::size_t count) {
+    if (receiver_meta_.size() < count) receiver_meta_.resize(count);
+  }
+  void describe(std::uint32_t receiver, float spread, std::uint32_t surface) {
+    receiver_meta_[receiver] = FullMeta{spread, surface};
+  }
+
   // Offers an entry to pixel (x, y), 0 <= x < width, 0 <= y < height: a full entry in front of the inline one
   // replaces it, a partial one in front of it (or behind it, its range reaching into the inline one's) is staged,
   // anything else is dropped (as CoverageArena::insert).
@@ -769,7 +781,6 @@ class StagedCoverageArena {
     if (entry.coverage >= kFullCoverage) {
       depth_[pixel] = entry.depth;
       receiver_[pixel] = entry.receiver;
-      full_meta_[pixel] = FullMeta{entry.spread, entry.surface};
       return;
     }
     stage(x, pixel, entry);
@@ -802,7 +813,8 @@ class StagedCoverageArena {
       }
       stage_[block].clear();
       for (std::size_t p = begin; p < end; ++p) {
-        CoverageArena::take_pixel(p, full_entry(p), lists_, p - begin, merged_, emit, order);
+        CoverageArena::take_pixel(p, depth_[p], receiver_[p], [&] { return full_entry(p); }, lists_, p - begin,
+                                  merged_, emit, order);
         depth_[p] = kFar;
       }
       lists_.mark_clean();
@@ -821,7 +833,8 @@ class StagedCoverageArena {
   static constexpr std::uint32_t kNoPartial = 0xFFFFFFFFu, kMixed = 0xFFFFFFFEu;
 
   CoverageEntry full_entry(std::size_t pixel) const {
-    return CoverageEntry{depth_[pixel], 1.0, receiver_[pixel], full_meta_[pixel].surface, full_meta_[pixel].spread};
+    const FullMeta& meta = receiver_meta_[receiver_[pixel]];
+    return CoverageEntry{depth_[pixel], 1.0, receiver_[pixel], meta.surface, meta.spread};
   }
   void stage(int x, std::size_t pixel, const CoverageEntry& entry) {
     if (one_surface_pixels_) {
@@ -841,7 +854,7 @@ class StagedCoverageArena {
 
   std::vector<double> depth_;            // per pixel: depth of the nearest full entry, kFar when none
   std::vector<std::uint32_t> receiver_;  // per pixel: the nearest full entry
-  std::vector<FullMeta> full_meta_;      // per pixel: the nearest full entry's spread and surface
+  std::vector<FullMeta> receiver_meta_;  // per receiver: its spread on this face and its surface (describe())
   std::vector<CoverageEntry> merged_;    // a pixel's list with its full entry among the entries
   std::vector<std::uint32_t> surface_;   // per pixel: the surface of all its staged entries, kNoPartial or kMixed
   std::vector<double> covered_;          // per pixel of a block: f of a pixel of one surface during the replay

@@ -35,6 +35,7 @@ TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
     for (int round = 0; round < 2; ++round) {  // twice: the arenas must come back empty after take_all
       immediate.reset(static_cast<std::size_t>(width) * height);
       staged.reset(width, height);
+      staged.describe_receivers(20000);
       for (std::uint32_t r = 0; r < 20000; ++r) {
         const int x = static_cast<int>(u(rng) * width), y = static_cast<int>(u(rng) * height);
         // Few pixels per receiver overlap at low resolution; draw depths from a few planes so ties occur.
@@ -43,6 +44,7 @@ TEST(FormfactorCoverageList, StagedArenaWalksLikeTheImmediateArena) {
         // Half the entries with a depth spread that reaches the neighbouring planes: layers in the walk.
         const float spread = u(rng) < 0.5 ? 0.0f : 0.3f;
         const CoverageEntry entry{depth, coverage, r, static_cast<std::uint32_t>(u(rng) * 6), spread};
+        staged.describe(r, spread, entry.surface);  // a receiver's spread and surface (here one entry each)
         immediate.insert(static_cast<std::size_t>(x) * height + y, entry);
         staged.insert(x, y, entry);
       }
