@@ -272,8 +272,10 @@ class CoverageWalk {
     // the hidden parts, each with its entry, the surfaces that hide it and its coverage. seen[p]: bit 0 when a part
     // of surface p is hidden by none, bit 1 when one is hidden.
     struct Hidden {
-      std::uint16_t entry, by;     // by: the hiding surfaces
-      std::uint16_t cut_behind, cut_front;  // the cell: behind these surfaces' planes, in front of those
+      std::uint16_t entry;
+      std::uint16_t by;          // the surfaces that hide it
+      std::uint16_t cut_behind;  // its cell: behind these surfaces' planes,
+      std::uint16_t cut_front;   // and in front of these
       double coverage;
     };
     std::array<double, kMaxPlaneEntries> front;
