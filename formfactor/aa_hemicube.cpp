@@ -25,15 +25,15 @@ namespace {
 // (`project`, into the task's pixel coordinates, counter-clockwise) and `back` clipped to the pixel's square. A cell
 // of it (cell_part) is that polygon cut by the lines where the planes meet back's plane in the image (where the two
 // planes' 1 / depth, affine in pixel coordinates, are equal); the part of a cell that `fronts` cover (hidden_part)
-// adds up the areas of its intersections with each front. Areas add up over the pieces
-// of a split receiver, on either side, and a cell of a leaf is made of the same cells of its pieces, so a leaf's
-// pieces are still hidden together as the leaf was (the factors a reused row keeps stay those of a fresh shot).
+// adds up the areas of its intersections with each front. Areas add up over the pieces of a split receiver, on
+// either side, and a cell of a leaf is made of the same cells of its pieces, so a leaf's pieces are still hidden
+// together as the leaf was (the factors a reused row keeps stay those of a fresh shot).
 template <class Project, class DepthOf>
 struct PlaneOrder {
   static constexpr bool kActive = true;
   const ReceiverView& receivers;
   Vec3 eye;
-  const Project* project = nullptr;             // project(receiver, out)
+  const Project* project = nullptr;   // project(receiver, out)
   const DepthOf* depth_of = nullptr;  // depth_of(receiver): 1 / depth of its plane in the task's pixel coordinates
   detail::OrderBuffers* buffers = nullptr;
   std::size_t height = 1;  // pixels per column (the arena's pixel p is column p / height, row p % height)
@@ -65,8 +65,12 @@ struct PlaneOrder {
     detail::OrderBuffers& c = *buffers;
     if (c.whole_pixel == pixel && c.whole_receiver == back) return c.whole_area;
     (*project)(back, c.back);
-    c.whole_area = c.back.size() >= 3 ? in_pixel(c.back) : 0.0;
-    c.whole.assign(c.in_pixel.begin(), c.in_pixel.end());
+    c.whole_area = 0.0;
+    c.whole.clear();
+    if (c.back.size() >= 3) {
+      c.whole_area = in_pixel(c.back);
+      c.whole.assign(c.in_pixel.begin(), c.in_pixel.end());
+    }
     c.whole_pixel = pixel;
     c.whole_receiver = back;
     return c.whole_area;
