@@ -157,8 +157,8 @@ struct PlaneOrder {
     return std::clamp(cell / whole, 0.0, 1.0);
   }
 
-  double hidden_part(std::uint32_t back, std::span<const std::uint32_t> behind, std::span<const std::uint32_t> in_front,
-                     std::span<const CoverageEntry> fronts) const {
+  double hidden_part(std::uint32_t back, std::span<const std::uint32_t> behind,
+                     std::span<const std::uint32_t> in_front, std::span<const CoverageEntry> fronts) const {
     double whole = 0.0;
     std::span<const Vec2> cell;
     const double area = cell_in_pixel(back, behind, in_front, whole, cell);
@@ -288,15 +288,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
       return 0;
     return m;
   };
-  // Receiver i as place() projects it, counter-clockwise, into `out` (empty when it has nothing on the face): the
-  // plane order's view of it.
+  // Receiver i as place() projects it, counter-clockwise, into `out` (empty when it has nothing in this task's
+  // columns): the plane order's view of it, asked after the rasterization (place() then reuses its buffers).
   const auto project = [&](std::uint32_t i, std::vector<Vec2>& out) {
-    ProjectedBox unused;
-    const std::size_t m = clip_to_face(prepared_.local_polygon(i, b.local), face, prepared_.outside_mask(i), b.scratch,
-                                       b.clipped);
-    out.clear();
-    if (m == 0 || !project_clipped(face, std::span<const Vec3>(b.clipped.data(), m), half, shift, b.projected, unused))
-      return;
+    const std::size_t m = place(i);
     out.assign(b.projected.begin(), b.projected.begin() + static_cast<std::ptrdiff_t>(m));
     if (signed_area(out) < 0.0) std::reverse(out.begin(), out.end());
   };

@@ -306,35 +306,11 @@ class CoverageWalk {
           if (count == kMaxAcross) return false;
           planes[count++] = static_cast<std::uint32_t>(q);
         }
-        if (count == 1) {
-          // Across one plane: the part in front of it, and the rest behind it (their areas add up to the entry's).
-          front_planes[0] = layer[run[planes[0]]].receiver;
-          // A part of less than a rounding of its area is none (the cut's rounding).
-          double part =
-              order.cell_part(layer[k].receiver, std::span<const std::uint32_t>(), std::span(front_planes.data(), 1));
-          if (part > 1.0 - 1e-12) part = 1.0;
-          const double in_front = layer[k].coverage * part;
-          const double behind = layer[k].coverage - in_front;
-          const std::uint16_t cut_behind = std::uint16_t(1u << planes[0]);
-          if (in_front > 0.0) {
-            if (wholly == 0) {
-              front[k] = in_front;
-              seen[p] |= 1;
-            } else {
-              if (parts == kMaxParts) return false;
-              hidden[parts++] = Hidden{static_cast<std::uint16_t>(k), wholly, 0, cut_behind, in_front};
-              seen[p] |= 2;
-            }
-          }
-          if (behind > 0.0) {
-            if (parts == kMaxParts) return false;
-            hidden[parts++] = Hidden{static_cast<std::uint16_t>(k), static_cast<std::uint16_t>(wholly | cut_behind),
-                                     cut_behind, 0, behind};
-            seen[p] |= 2;
-          }
-          continue;
-        }
-        for (std::uint32_t subset = 0; subset < (1u << count); ++subset) {
+        // The cells partition the entry: the last (behind every plane it lies across) is what the others leave, and
+        // a cell of less than a rounding of the entry is none (the cut's rounding).
+        const std::uint32_t last = (1u << count) - 1;
+        double left = layer[k].coverage;
+        for (std::uint32_t subset = 0; subset <= last; ++subset) {
           std::size_t nb = 0, nf = 0;
           std::uint16_t cut_behind = 0;
           for (std::size_t i = 0; i < count; ++i) {
@@ -347,10 +323,13 @@ class CoverageWalk {
             }
           }
           const std::uint16_t cell_by = wholly | cut_behind;
-          const double coverage =
-              layer[k].coverage * order.cell_part(layer[k].receiver, std::span(behind_planes.data(), nb),
-                                                  std::span(front_planes.data(), nf));
-          if (!(coverage > 0.0)) continue;
+          double coverage = subset == last ? left
+                                           : layer[k].coverage * order.cell_part(layer[k].receiver,
+                                                                                 std::span(behind_planes.data(), nb),
+                                                                                 std::span(front_planes.data(), nf));
+          coverage = std::min(coverage, left);
+          left -= coverage;
+          if (!(coverage > 1e-12 * layer[k].coverage)) continue;
           if (cell_by == 0) {
             front[k] = coverage;
             seen[p] |= 1;
