@@ -230,6 +230,7 @@ Solver::PatchScan Solver::scan_patches() const {
   }
   const double emitted = emitted_flux_.sum();
   scan.unshot_fraction = emitted > 0.0 ? unshot.sum() / emitted : 0.0;
+  scan.net_unshot_fraction = emitted > 0.0 ? unshot_area.sum() / emitted : 0.0;
   // R = 1 / (1 - rho_avg), ambient = R sum dB_i A_i / sum A_i.
   if (area > 0.0) {
     for (int c = 0; c < 3; ++c) {
@@ -260,6 +261,7 @@ Solver::PatchScan Solver::scan_patches() const {
 }
 
 double Solver::unshot_fraction() const { return scan_patches().unshot_fraction; }
+double Solver::net_unshot_fraction() const { return scan_patches().net_unshot_fraction; }
 
 Rgb Solver::ambient() const { return scan_patches().ambient; }
 
@@ -1091,7 +1093,7 @@ void Solver::shooting_loop(const std::function<bool(const Progress&)>& keep_goin
       break;
     }
     if (shots_ >= options_.max_shots) break;
-    if (scan.unshot_fraction > kDivergedUnshot) {
+    if (std::abs(scan.net_unshot_fraction) > kDivergedUnshot) {
       diverged_ = true;
       break;
     }

@@ -76,8 +76,13 @@ struct SolverOptions {
 // data/scenes/), otherwise the hierarchy's own defaults (zeros).
 mesh::MeshingOptions default_meshing(const Scene& scene);
 
-// run() stops when the unshot flux exceeds this many times the emitted flux: plain shooting only lowers it (it starts
-// at 1), and over-relaxation or overshooting lift it by a fraction of it, never tenfold.
+// run() stops when the net unshot flux, sum dB A with its sign (unshot_flux()), exceeds this many times the emitted
+// flux either way. It starts at the emitted flux and, in a scene whose form factors from every point add up to at
+// most 1, it is what has not been absorbed yet, emitted - absorbed, so it never passes the emitted flux: plain
+// shooting only lowers it, and over-relaxation and overshooting, whose negative dB are flux to be taken back, do
+// not lift it either. (Summed with |dB|, as unshot_fraction() is, it can: overshooting leaves each shooter
+// -rho x ambient, about 2 rho / (1 - rho) times what is left in all, 65 times at rho = 0.97.) Factors that add up
+// to more than 1 make flux out of nothing, and it grows without end.
 inline constexpr double kDivergedUnshot = 10.0;
 
 struct Progress {
@@ -126,7 +131,7 @@ class Solver {
 
   bool converged() const { return converged_; }
   bool interrupted() const { return interrupted_; }
-  // Whether run() stopped because the unshot flux grew past kDivergedUnshot times the emitted flux: form factors
+  // Whether run() stopped because the net unshot flux grew past kDivergedUnshot times the emitted flux: form factors
   // from a patch that add up to more than 1 (the analytic back end ignores what hides one surface from another)
   // feed back more than they absorb, and the loop never converges.
   bool diverged() const { return diverged_; }
@@ -145,6 +150,9 @@ class Solver {
   // as sum |dB| A over patches and channels: with overrelaxation or overshooting dB can be negative, and that is
   // flux still to be taken back. Without it every dB >= 0 and this is unshot_flux().sum() / emitted.
   double unshot_fraction() const;
+  // The net unshot flux over the emitted flux, both summed over channels, dB taken with its sign: what the solve has
+  // not absorbed yet (escaped_flux() aside). run() stops as diverged when it passes kDivergedUnshot either way.
+  double net_unshot_fraction() const;
 
   // The display-only ambient term of Cohen et al. 1988 (references.md) and each leaf's displayed radiosity
   // B + rho * ambient, indexed by NodeId (inner nodes hold their B).
@@ -180,7 +188,8 @@ class Solver {
   // overshooting the largest flux a shot would send, sum |w dB + rho x ambient| A; ties to the lowest id; kNoNode
   // when none is left) and the ambient term.
   struct PatchScan {
-    double unshot_fraction = 0.0;
+    double unshot_fraction = 0.0;      // sum |dB| A / emitted flux (unshot_fraction())
+    double net_unshot_fraction = 0.0;  // sum dB A / emitted flux (net_unshot_fraction())
     mesh::NodeId shooter = mesh::kNoNode;
     Rgb ambient{};
   };

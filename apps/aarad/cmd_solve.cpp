@@ -328,9 +328,9 @@ void run_solve(SolveCommandOptions options) {
   // written also gives 130. A solve that diverged wrote what it had, for a look, and fails.
   if (solver.diverged()) {
     std::fprintf(stderr,
-                 "aarad: error: the solve diverged: after %lld shots the unshot flux is %.3g times the emitted flux; "
-                 "the form factors from some patch add up to more than 1%s\n",
-                 static_cast<long long>(solver.shots()), solver.unshot_fraction(),
+                 "aarad: error: the solve diverged: after %lld shots the net unshot flux is %.3g times the emitted "
+                 "flux; the form factors from some patch add up to more than 1%s\n",
+                 static_cast<long long>(solver.shots()), solver.net_unshot_fraction(),
                  options.solver.backend == "analytic"
                      ? " (the analytic back end ignores what hides one surface from another): use --ff aa-hemicube"
                      : "");
