@@ -209,6 +209,9 @@ struct ObjText {
   std::vector<Vec3> positions;   // every `v`, parsed with strtod
   std::vector<int> face_lines;   // line of every `f` with at least three vertex references, in order
   std::vector<std::size_t> face_sizes;  // the number of vertex references on each of those lines
+  std::size_t short_faces = 0;   // `f` lines with fewer than three vertex references (skipped with a warning)
+  int first_short_line = 0;      // the first of them, and its warning
+  std::string first_short_warning;
   std::vector<std::pair<int, std::string>> material_libraries;  // (line, file name) per `mtllib` entry
   std::vector<std::pair<int, std::string>> material_uses;       // (line, name) per `usemtl`
   std::optional<Camera> camera;
@@ -354,6 +357,10 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       if (t.size() < 4) {
         warnings.push_back(InputError::format(path, number, "face with fewer than three vertices skipped; give it "
                                                             "at least three vertices or remove it"));
+        if (text.short_faces++ == 0) {
+          text.first_short_line = number;
+          text.first_short_warning = warnings.back();
+        }
       } else {
         text.face_lines.push_back(number);
         text.face_sizes.push_back(t.size() - 1);
@@ -720,8 +727,17 @@ Scene import_obj(const std::string& obj_path) {
   // coordinates took about 200 bytes per face, and its string and vector comparisons a second per million faces.
   std::map<std::string, std::uint32_t> group_numbers;  // by group name, in order of first use
 
-  std::size_t face_number = 0, skipped_faces = 0;
-  std::string first_skip;  // the warning of the first face checked_face skipped
+  // Faces skipped, those of fewer than three vertices (found by the line-by-line read) among them, and the warning
+  // of the one on the earliest line (line 0 when the lines are not known), for an error if none is left.
+  std::size_t face_number = 0, skipped_faces = text.short_faces;
+  std::string first_skip = text.first_short_warning;
+  int first_skip_line = text.first_short_line;
+  const auto note_skip = [&](int line) {
+    if (skipped_faces++ == 0 || (line > 0 && line < first_skip_line)) {
+      first_skip = warnings.back();
+      first_skip_line = line;
+    }
+  };
   bool unassigned_faces = false;
   // The faces to add, once the scene's size is known (below).
   struct Kept {
@@ -792,7 +808,7 @@ Scene import_obj(const std::string& obj_path) {
 
       const auto polygons = checked_face(vertices, obj_path, line, warnings);
       if (polygons.empty()) {
-        if (skipped_faces++ == 0) first_skip = warnings.back();
+        note_skip(line);
         continue;
       }
       const int parsed_material = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
@@ -847,7 +863,7 @@ Scene import_obj(const std::string& obj_path) {
                                 number_text(kSmallestFace) + " of the scene's diagonal, " +
                                 number_text(smallest / kSmallestFace) + ", which the meshing does not resolve) skipped; "
                                 "scale it up or give it a scene of its own"));
-      if (skipped_faces++ == 0) first_skip = warnings.back();
+      note_skip(k.line);
       continue;
     }
     std::optional<std::uint32_t>& group = groups[k.shape];

@@ -347,6 +347,16 @@ TEST_F(SceneImport, import_with_every_face_skipped_names_the_first) {
       write("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 4\n"));
   EXPECT_NE(e.message().find("all 2 faces were skipped"), std::string::npos) << e.message();
   EXPECT_NE(e.message().find("degenerate.obj:5: face of zero area"), std::string::npos) << e.message();
+  // Faces of fewer than three vertices count too (they were left out, and the error said the file had no 'f' line),
+  // and the first is the one on the earliest line, whichever check skipped it.
+  const InputError short_only = import_error(write("short.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\no a\nf 1 2\n"));
+  EXPECT_NE(short_only.message().find("all 1 faces were skipped"), std::string::npos) << short_only.message();
+  EXPECT_NE(short_only.message().find("short.obj:5: face with fewer than three vertices"), std::string::npos)
+      << short_only.message();
+  const InputError mixed =
+      import_error(write("mixed.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 2\nf 3 2 1\n"));
+  EXPECT_NE(mixed.message().find("all 3 faces were skipped"), std::string::npos) << mixed.message();
+  EXPECT_NE(mixed.message().find("mixed.obj:4: face of zero area"), std::string::npos) << mixed.message();
   // A face whose area overflows a double is skipped with its own reason, not taken for a line.
   const Scene scene = import_obj(write("vast_face.obj", "v 0 0 0\nv 1e200 0 0\nv 0 1e200 0\nv 1 0 0\nv 0 1 0\n"
                                                         "f 1 2 3\nf 1 4 5\n"));
