@@ -17,6 +17,7 @@
 #include <string_view>
 #include <system_error>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace aarad::refine {
@@ -66,12 +67,27 @@ void check_output_directory(const std::filesystem::path& directory) {
   if (::access(existing.c_str(), W_OK | X_OK) != 0)
     throw Error("cannot write files in " + existing.string() + ": " + std::strerror(errno));
   if (existing != absolute) return;  // the directory is new: nothing in it yet
+  // In a sticky folder (mode +t, as /tmp), a file may be replaced or removed only by its owner, the folder's
+  // owner or root (rename(2) and unlink(2) give EPERM otherwise): another user's report.json in /tmp/out let the
+  // whole solve run and then fail, leaving the new mesh.ply beside the old images.
+  struct stat folder {};
+  const bool sticky = ::stat(absolute.c_str(), &folder) == 0 && (folder.st_mode & S_ISVTX) != 0 &&
+                      folder.st_uid != ::geteuid() && ::geteuid() != 0;
   // Every file is renamed into place: rename(2) cannot replace a directory, and a FIFO or a device is not a file a
   // solve should replace. A regular file, or a symbolic link (replaced, not followed), is fine.
   for (const std::string_view name : kSolutionFileNames) {
     const fs::path path = directory / name;
     const fs::file_status status = fs::symlink_status(path, error);
-    if (!fs::exists(status) || fs::is_regular_file(status) || fs::is_symlink(status)) continue;
+    if (!fs::exists(status)) continue;
+    if (fs::is_regular_file(status) || fs::is_symlink(status)) {
+      struct stat file {};
+      if (sticky && ::lstat(path.c_str(), &file) == 0 && file.st_uid != ::geteuid())
+        throw Error("cannot replace " + path.string() + ": it belongs to another user (uid " +
+                    std::to_string(file.st_uid) + ") and " + directory.string() +
+                    " is a sticky folder, where only a file's owner may replace it; remove it as its owner or write "
+                    "the solution elsewhere");
+      continue;
+    }
     throw Error("cannot write " + path.string() + ": it exists and is " +
                 (fs::is_directory(status) ? "a directory" : "not a regular file") +
                 "; move it away or write the solution elsewhere");

@@ -43,8 +43,9 @@ inline constexpr std::array<std::string_view, 6> kSolutionFileNames = {
 // Checks, without creating anything, that write_solution_files could create `directory` and write into it: the
 // directory, or the nearest ancestor that exists, is a directory this process may write into, no part of the
 // path is a symbolic link to nothing, and none of kSolutionFileNames in it is a directory or another file that
-// is neither regular nor a symbolic link (a FIFO, a device). A solve calls it before it starts, so that it does
-// not end in an error about its output. Throws aarad::Error.
+// is neither regular nor a symbolic link (a FIFO, a device), nor, in a sticky folder such as /tmp, a file of
+// another user that this process may not replace. A solve calls it before it starts, so that it does not end in an
+// error about its output. Throws aarad::Error.
 void check_output_directory(const std::filesystem::path& directory);
 
 // Writes mesh.ply, flat.png, smooth.png, mesh.png and radiosity.exr into `directory` (created when missing),

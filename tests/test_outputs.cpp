@@ -33,6 +33,7 @@
 #include <string>
 #include <thread>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace aarad::refine {
@@ -344,6 +345,52 @@ TEST(OutputsFiles, AWriteThatFailsPartWayLeavesNoFileAndSaysSo) {
   fs::remove_all(directory);
 }
 
+
+// In a sticky folder (as /tmp) another user's report.json cannot be replaced: rename(2) gives EPERM. The check before
+// a solve refused nothing, and a reviewer's solve ran to the end and failed writing, the new mesh.ply left beside the
+// old files. Now check_output_directory names the file. The other user is nobody (65534), in a child process that
+// gives up root; the file and the folder are root's, in the system's temporary folder, which every user may enter.
+TEST(OutputsFiles, AnotherUsersFileInAStickyFolderIsRefusedBeforeTheSolve) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root, to make a file of another user than the one that runs the check";
+  const fs::path folder = fs::temp_directory_path() / ("aarad-sticky-" + std::to_string(getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  fs::permissions(folder, fs::perms::all | fs::perms::sticky_bit);
+  std::ofstream(folder / "report.json") << "{}";
+  const fs::path message_file = folder / "message.txt";
+  const auto check_as = [&](uid_t user) {
+    const pid_t child = ::fork();
+    if (child == 0) {
+      int code = 2;
+      if (::setgid(user) == 0 && ::setuid(user) == 0) {
+        try {
+          check_output_directory(folder);
+          code = 0;
+        } catch (const Error& e) {
+          std::ofstream(message_file) << e.what();
+          code = 1;
+        }
+      }
+      std::_Exit(code);
+    }
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  ASSERT_EQ(check_as(65534), 1);
+  std::ifstream in(message_file);
+  const std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(message.find("cannot replace " + (folder / "report.json").string() + ": it belongs to another user"),
+            std::string::npos)
+      << message;
+  // Without the sticky bit the folder's write permission is enough to replace it, and the owner may anyway.
+  fs::remove(message_file);
+  fs::permissions(folder, fs::perms::all);
+  EXPECT_EQ(check_as(65534), 0);
+  fs::permissions(folder, fs::perms::all | fs::perms::sticky_bit);
+  EXPECT_EQ(check_as(0), 0);
+  fs::remove_all(folder);
+}
 // A floor one unit below the eye, reaching from behind the camera far ahead, seen level: it fills the lower half of
 // the image at any field of view. Clipped at the near plane, its triangle reaches screen coordinates far beyond an
 // int when the view is narrow (at half a degree, 3e9 pixels to the side); the pixel range is clamped before it is
