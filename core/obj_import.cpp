@@ -163,6 +163,13 @@ std::string trim(const std::string& s) {
   return s.substr(first, last - first + 1);
 }
 
+// A word of the file as a message shows it: whole up to 64 characters, else its start and its length (a reviewer's
+// coordinate of ten million digits made a 10 MB error line).
+std::string shown(const std::string& word) {
+  if (word.size() <= 64) return word;
+  return word.substr(0, 48) + "... (" + std::to_string(word.size()) + " characters)";
+}
+
 // strtod over a whole token: nullopt when the token is not a number. NaN and infinity parse (and are
 // rejected by the callers with a message that says so).
 std::optional<double> parse_number(const std::string& token) {
@@ -326,16 +333,16 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       for (int c = 0; c < 3; ++c) {
         const auto value = parse_number(t[static_cast<std::size_t>(c + 1)]);
         if (!value)
-          throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
+          throw InputError(path, number, "vertex coordinate '" + shown(t[static_cast<std::size_t>(c + 1)]) +
                                              "' is not a number; write a finite decimal number");
         // strtod says ERANGE when a number such as 1e999 is beyond a double's range (it gives infinity), not
         // for "inf" written out.
         if (std::isinf(*value) && errno == ERANGE)
-          throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
+          throw InputError(path, number, "vertex coordinate '" + shown(t[static_cast<std::size_t>(c + 1)]) +
                                              "' is beyond the range of double precision (about 1.8e308); scale the "
                                              "scene down");
         if (!std::isfinite(*value))
-          throw InputError(path, number, "vertex coordinate '" + t[static_cast<std::size_t>(c + 1)] +
+          throw InputError(path, number, "vertex coordinate '" + shown(t[static_cast<std::size_t>(c + 1)]) +
                                              "' is not finite (NaN or infinity); replace it with a finite number");
         p[c] = *value;
       }
@@ -343,14 +350,14 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
     } else if (key == "f") {
       for (std::size_t i = 1; i < t.size(); ++i) {
         if (!vertex_reference(t[i]))
-          throw InputError(path, number, "face vertex '" + t[i] + "' is not a vertex reference; write v, v/vt, "
+          throw InputError(path, number, "face vertex '" + shown(t[i]) + "' is not a vertex reference; write v, v/vt, "
                                          "v//vn or v/vt/vn with whole numbers other than 0 (indices count from 1, "
                                          "negative ones from the end)");
         // tinyobjloader reads indices as int: a larger one would wrap around to some other vertex.
         errno = 0;
         const long long index = std::strtoll(t[i].c_str(), nullptr, 10);
         if (errno == ERANGE || index > std::numeric_limits<int>::max() || index < -std::numeric_limits<int>::max())
-          throw InputError(path, number, "vertex index '" + t[i].substr(0, t[i].find('/')) + "' is out of range (the "
+          throw InputError(path, number, "vertex index '" + shown(t[i].substr(0, t[i].find('/'))) + "' is out of range (the "
                                          "file defines " + std::to_string(text.positions.size()) + " vertices "
                                          "before this line); fix the face's vertex references");
       }
@@ -371,7 +378,7 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       const bool group = t.size() == 2 && t[1].size() <= 9 &&
                          std::all_of(t[1].begin(), t[1].end(), [](char c) { return c >= '0' && c <= '9'; });
       if (!off && !group)
-        warnings.push_back(InputError::format(path, number, "smoothing statement '" + trim(line) + "' not "
+        warnings.push_back(InputError::format(path, number, "smoothing statement '" + shown(trim(line)) + "' not "
                                                             "understood; write 's N' with a whole number N below "
                                                             "1e9, or 's off'"));
     } else if (key == "mtllib") {
@@ -393,7 +400,7 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
       text.material_uses.emplace_back(number, t.size() > 1 ? t[1] : std::string());
       if (t.size() > 2)
         warnings.push_back(InputError::format(path, number, "material name with a space: OBJ readers take only its "
-                                                            "first word, '" + t[1] + "'; write the name without "
+                                                            "first word, '" + shown(t[1]) + "'; write the name without "
                                                             "spaces here and in the MTL file"));
     } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "camera:") {
       text.camera = parse_camera_comment(std::vector<std::string>(t.begin() + 3, t.end()));
@@ -438,12 +445,12 @@ Rgb parse_colour(const std::string& path, int line, const std::vector<std::strin
   std::vector<double> values;
   for (std::size_t i = 1; i < t.size() && values.size() < 3; ++i) {
     const auto v = parse_number(t[i]);
-    if (!v) throw InputError(path, line, "'" + t[0] + "' needs one or three numbers, got '" + t[i] + "'; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
+    if (!v) throw InputError(path, line, "'" + t[0] + "' needs one or three numbers, got '" + shown(t[i]) + "'; write e.g. '" + t[0] + " 0.5 0.5 0.5'");
     values.push_back(*v);
   }
   if (values.size() == 3 && t.size() > 4)
     warnings.push_back(InputError::format(path, line, "'" + t[0] + "' takes one or three numbers; the " +
-                                                          std::to_string(t.size() - 4) + " after the third ('" + t[4] +
+                                                          std::to_string(t.size() - 4) + " after the third ('" + shown(t[4]) +
                                                           "' first) are ignored"));
   if (values.size() == 1) return Rgb(values[0]);
   if (values.size() == 3) return Rgb(values[0], values[1], values[2]);

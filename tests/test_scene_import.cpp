@@ -253,6 +253,12 @@ TEST_F(SceneImport, import_infinite_coordinate_is_error_with_line) {
   EXPECT_EQ(big.line(), 2);
   EXPECT_EQ(big.message(), "vertex coordinate '1e999' is beyond the range of double precision (about 1.8e308); scale "
                            "the scene down");
+  // A word too long to show whole is cut, with its length (ten million digits made a 10 MB message).
+  const std::string digits(100000, '9');
+  const InputError longer = import_error(write("long.obj", "v 0 0 0\nv 1 0 " + digits + "x\nv 1 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(longer.line(), 2);
+  EXPECT_EQ(longer.message(), "vertex coordinate '" + digits.substr(0, 48) + "... (100001 characters)' is not a "
+                              "number; write a finite decimal number");
 }
 
 TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
