@@ -6,12 +6,12 @@
 // end alone (Time = wall, CPU = all threads of the process).
 //
 //   build-bench/bench/bench_formfactor --benchmark_counters_tabular=true
-#include "core/builtin_scenes.h"
-#include "core/polygon.h"
-#include "formfactor/aa_hemicube.h"
-#include "formfactor/backend.h"
-#include "formfactor/hemicube.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/polygon.h"
+#include "aarad/formfactor/aa_hemicube.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/hemicube.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
 #include <benchmark/benchmark.h>
 

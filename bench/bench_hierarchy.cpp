@@ -9,9 +9,9 @@
 // quadratic on (BM_CoplanarOverlapsDecals, BM_CoplanarOverlapsPlanks); meshing and checking a floor with many
 // holes (BM_FloorWithHoles); meshing a floor cut along the feet of many posts standing on it
 // (BM_FloorWithStandingPosts).
-#include "core/builtin_scenes.h"
-#include "mesh/hierarchy.h"
-#include "mesh/invariants.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/mesh/invariants.h"
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>

@@ -7,7 +7,7 @@
 // double image (what a hemicube does with it). Items are polygons. Before the benchmarks run, each
 // library's largest per-pixel coverage error against the exact area (polygon ∩ pixel in exact rationals)
 // is printed. docs/benchmarks.md ("Raster") records the results.
-#include "core/area_rasterizer.h"
+#include "aarad/core/area_rasterizer.h"
 
 #include <CGAL/Exact_rational.h>
 #include <agg_rasterizer_scanline_aa.h>

@@ -13,8 +13,8 @@
 //
 // A run that exceeds the budget is stopped after its current shot and reported with the unshot flux it reached.
 // Prints a Markdown table on stdout (docs/benchmarks.md, "Solver").
-#include "core/builtin_scenes.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/refine/solver.h"
 
 #include <tbb/global_control.h>
 

@@ -8,10 +8,10 @@
 // edge produces the very same crossing points in both polygons), and the sign of Figure 4 becomes
 // `sign` = +1 for edges that run right to left in a counter-clockwise polygon (its top side) and -1 for
 // the others, multiplied by -1 for a clockwise polygon so coverage is positive for either winding.
-#include "core/area_rasterizer.h"
+#include "aarad/core/area_rasterizer.h"
 
-#include "core/error.h"
-#include "core/predicates.h"
+#include "aarad/core/error.h"
+#include "aarad/core/predicates.h"
 
 #include <CGAL/Exact_rational.h>
 

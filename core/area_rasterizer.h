@@ -16,7 +16,7 @@
 //   only the row ranges that edges touched are read and cleared again, column by column.
 #pragma once
 
-#include "core/math.h"
+#include "aarad/core/math.h"
 
 #include <algorithm>
 #include <cstdint>

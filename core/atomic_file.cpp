@@ -1,8 +1,8 @@
 // Whole-or-nothing file writing (see atomic_file.h): a temporary name in the destination's directory, then
 // rename(2), which replaces the destination atomically on POSIX file systems.
-#include "core/atomic_file.h"
+#include "aarad/core/atomic_file.h"
 
-#include "core/error.h"
+#include "aarad/core/error.h"
 
 #include <atomic>
 #include <cerrno>

@@ -3,11 +3,11 @@
 // fixes that reference names for a hemicube program that culls back faces. The office imitates the second
 // test scene of Chandran, Kiran, Phani and Rai, section 4 (three office chairs and a pedestal table). The
 // furnace is the closed-environment test of references.md: B = E / (1 - rho) everywhere.
-#include "core/builtin_scenes.h"
+#include "aarad/core/builtin_scenes.h"
 
-#include "core/error.h"
-#include "core/obj_import.h"
-#include "core/polygon.h"
+#include "aarad/core/error.h"
+#include "aarad/core/obj_import.h"
+#include "aarad/core/polygon.h"
 
 #include <glm/mat3x3.hpp>
 

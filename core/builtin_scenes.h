@@ -3,7 +3,7 @@
 // point that resolves a scene argument.
 #pragma once
 
-#include "core/scene.h"
+#include "aarad/core/scene.h"
 
 #include <string>
 #include <vector>

@@ -1,9 +1,9 @@
 // The checks of a scene face (face_check.h). The order matters for the messages: a face whose vertices lie on one
 // line is reported as such before its projection is looked at, and a bow-tie, whose Newell area may vanish, as
 // self-intersecting rather than of zero area.
-#include "core/face_check.h"
+#include "aarad/core/face_check.h"
 
-#include "core/polygon.h"
+#include "aarad/core/polygon.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 // refine_Delaunay_mesh_2).
 #pragma once
 
-#include "core/math.h"
+#include "aarad/core/math.h"
 
 #include <span>
 #include <vector>

@@ -1,8 +1,8 @@
 // Image writing through OpenImageIO and the display tone map (see image.h and docs/solver.md).
-#include "core/image.h"
+#include "aarad/core/image.h"
 
-#include "core/atomic_file.h"
-#include "core/error.h"
+#include "aarad/core/atomic_file.h"
+#include "aarad/core/error.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>

@@ -8,7 +8,7 @@
 // picks the exposure that maps a given area-weighted percentile of max(r, g, b) to 1.
 #pragma once
 
-#include "core/rgb.h"
+#include "aarad/core/rgb.h"
 
 #include <array>
 #include <cstdint>

@@ -1,9 +1,9 @@
 // OBJ/MTL export (Wavefront OBJ and MTL as documented by Paul Bourke, "Object Files (.obj)" and "MTL
 // material format"), the inverse of core/obj_import.cpp.
-#include "core/obj_export.h"
+#include "aarad/core/obj_export.h"
 
-#include "core/atomic_file.h"
-#include "core/error.h"
+#include "aarad/core/atomic_file.h"
+#include "aarad/core/error.h"
 
 #include <charconv>
 #include <filesystem>

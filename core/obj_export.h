@@ -3,7 +3,7 @@
 // built-in scenes written this way.
 #pragma once
 
-#include "core/scene.h"
+#include "aarad/core/scene.h"
 
 #include <string>
 

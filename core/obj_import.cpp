@@ -3,12 +3,12 @@
 // coordinates and material values from a second, line-by-line read of the files. Non-planar faces are
 // split by ear clipping (Meisters, "Polygons have ears", Amer. Math. Monthly 82, 1975) on the face's
 // projection, with CGAL's exact orientation predicates deciding convexity and containment.
-#include "core/obj_import.h"
+#include "aarad/core/obj_import.h"
 
-#include "core/error.h"
-#include "core/face_check.h"
-#include "core/polygon.h"
-#include "core/predicates.h"
+#include "aarad/core/error.h"
+#include "aarad/core/face_check.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/predicates.h"
 
 // The CMake target defines it too; the header must see it in any case (double-precision real_t).
 #ifndef TINYOBJLOADER_USE_DOUBLE

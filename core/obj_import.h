@@ -39,7 +39,7 @@
 // once, with its first line.
 #pragma once
 
-#include "core/scene.h"
+#include "aarad/core/scene.h"
 
 #include <string>
 

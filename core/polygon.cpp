@@ -1,6 +1,6 @@
-#include "core/polygon.h"
+#include "aarad/core/polygon.h"
 
-#include "core/predicates.h"
+#include "aarad/core/predicates.h"
 
 #include <algorithm>
 #include <cmath>

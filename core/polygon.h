@@ -1,7 +1,7 @@
 // Planar polygon utilities. A polygon is a closed loop of vertices without the first repeated.
 #pragma once
 
-#include "core/math.h"
+#include "aarad/core/math.h"
 
 #include <array>
 #include <cstddef>

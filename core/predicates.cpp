@@ -1,4 +1,4 @@
-#include "core/predicates.h"
+#include "aarad/core/predicates.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>

@@ -2,7 +2,7 @@
 // exactly, compute "where" in doubles (CGAL's filtered-predicate design).
 #pragma once
 
-#include "core/math.h"
+#include "aarad/core/math.h"
 
 #include <cmath>
 #include <limits>

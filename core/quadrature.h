@@ -2,7 +2,7 @@
 // first guesses; Press et al., Numerical Recipes, section 4.6).
 #pragma once
 
-#include "core/math.h"
+#include "aarad/core/math.h"
 
 #include <cmath>
 #include <cstddef>

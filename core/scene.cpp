@@ -2,11 +2,11 @@
 // A physical surface is what the paper's identical-z exception needs (Chandran et al., section 3.2.1):
 // pieces of one surface never occlude each other. Here it is the faces of one group that share one plane,
 // one facing direction and one material (../shared/design.md, "Scene files").
-#include "core/scene.h"
+#include "aarad/core/scene.h"
 
-#include "core/error.h"
-#include "core/face_check.h"
-#include "core/polygon.h"
+#include "aarad/core/error.h"
+#include "aarad/core/face_check.h"
+#include "aarad/core/polygon.h"
 
 #include <CGAL/box_intersection_d.h>
 

@@ -3,8 +3,8 @@
 // meshes its physical surfaces; the solver reads materials through them.
 #pragma once
 
-#include "core/math.h"
-#include "core/rgb.h"
+#include "aarad/core/math.h"
+#include "aarad/core/rgb.h"
 
 #include <cstdint>
 #include <optional>

@@ -1,7 +1,7 @@
 // The anti-aliased hemicube: Chandran, Kiran, Phani and Rai, section 3.2 (see aa_hemicube.h).
-#include "formfactor/aa_hemicube.h"
+#include "aarad/formfactor/aa_hemicube.h"
 
-#include "core/polygon.h"
+#include "aarad/core/polygon.h"
 
 #include <tbb/parallel_for.h>
 

@@ -25,10 +25,10 @@
 // added in task order, so the numbers do not depend on the number of threads.
 #pragma once
 
-#include "core/area_rasterizer.h"
-#include "formfactor/backend.h"
-#include "formfactor/coverage_list.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/area_rasterizer.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/coverage_list.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

@@ -1,7 +1,7 @@
 // Exact point-to-polygon form factor: Baum, Rushmeier and Winget 1989, eq. 9 (Lambert's contour integral).
-#include "formfactor/analytic.h"
+#include "aarad/formfactor/analytic.h"
 
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -3,9 +3,9 @@
 // factors", SIGGRAPH 1989, eq. 9 (../shared/references.md).
 #pragma once
 
-#include "core/math.h"
-#include "formfactor/backend.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/math.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

@@ -2,8 +2,8 @@
 // (Mitsuba-style plugins). Inner loops stay inside each back end; nothing per pixel is virtual.
 #pragma once
 
-#include "core/math.h"
-#include "formfactor/receiver_view.h"
+#include "aarad/core/math.h"
+#include "aarad/formfactor/receiver_view.h"
 
 #include <cstdint>
 #include <memory>

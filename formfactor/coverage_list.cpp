@@ -1,6 +1,6 @@
 // Per-pixel coverage lists of the anti-aliased hemicube (Chandran, Kiran, Phani and Rai, section 3.2.1):
 // insertion sort into small pooled arrays. See coverage_list.h for the rules and the layout.
-#include "formfactor/coverage_list.h"
+#include "aarad/formfactor/coverage_list.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // The classical hemicube (Cohen and Greenberg 1985): point sampling, z-buffer and item buffer per face.
-#include "formfactor/hemicube.h"
+#include "aarad/formfactor/hemicube.h"
 
 #include <tbb/parallel_for.h>
 

@@ -4,9 +4,9 @@
 // the pixels it wins. This is the baseline the anti-aliased hemicube (aa_hemicube.h) is compared against.
 #pragma once
 
-#include "core/math.h"
-#include "formfactor/backend.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/math.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

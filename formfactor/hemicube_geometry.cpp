@@ -1,9 +1,9 @@
 // Hemicube geometry: Cohen and Greenberg 1985 (faces, delta form factors), Chandran et al. section 3.2
 // (culling and clipping), Sutherland and Hodgman 1974 (clipping). See hemicube_geometry.h for the conventions.
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
-#include "core/error.h"
-#include "core/predicates.h"
+#include "aarad/core/error.h"
+#include "aarad/core/predicates.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -29,10 +29,10 @@
 // double count.
 #pragma once
 
-#include "core/math.h"
-#include "core/predicates.h"
-#include "formfactor/backend.h"
-#include "formfactor/receiver_view.h"
+#include "aarad/core/math.h"
+#include "aarad/core/predicates.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/receiver_view.h"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
-#include "formfactor/receiver_view.h"
+#include "aarad/formfactor/receiver_view.h"
 
-#include "core/error.h"
-#include "core/polygon.h"
+#include "aarad/core/error.h"
+#include "aarad/core/polygon.h"
 
 #include <algorithm>
 #include <atomic>

@@ -2,7 +2,7 @@
 // patch/element hierarchy; tests build it from plain polygons. formfactor/ never includes mesh/.
 #pragma once
 
-#include "core/math.h"
+#include "aarad/core/math.h"
 
 #include <cstdint>
 #include <span>

@@ -1,9 +1,9 @@
 // The back-end registry (Mitsuba-style: back ends chosen at run time by name) and the shooter's frame.
-#include "core/error.h"
-#include "formfactor/aa_hemicube.h"
-#include "formfactor/analytic.h"
-#include "formfactor/backend.h"
-#include "formfactor/hemicube.h"
+#include "aarad/core/error.h"
+#include "aarad/formfactor/aa_hemicube.h"
+#include "aarad/formfactor/analytic.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/hemicube.h"
 
 #include <cmath>
 #include <string>

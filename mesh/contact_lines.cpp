@@ -1,6 +1,6 @@
 // Contact lines between surfaces (see contact_lines.h): the D0 discontinuities of Heckbert 1992, section 3, and
 // Lischinski, Tampieri and Greenberg 1992, section 3.1.
-#include "mesh/contact_lines.h"
+#include "aarad/mesh/contact_lines.h"
 
 #include <CGAL/box_intersection_d.h>
 

@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "core/math.h"
-#include "core/scene.h"
+#include "aarad/core/math.h"
+#include "aarad/core/scene.h"
 
 namespace aarad::mesh {
 

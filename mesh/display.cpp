@@ -2,9 +2,9 @@
 // leaves (Cohen and Wallace, "Radiosity and Realistic Image Synthesis", 1993, section 9.3.1 "nodal averaging"),
 // hanging vertices interpolated along their host edge so no seam appears (Baum, Mann, Smith and Winget 1991,
 // section 4.3, "T-vertices"), and a crack-free triangulation that anchors the T-vertices.
-#include "mesh/display.h"
+#include "aarad/mesh/display.h"
 
-#include "mesh/leaf_mesh.h"
+#include "aarad/mesh/leaf_mesh.h"
 
 #include <algorithm>
 #include <array>

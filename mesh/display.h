@@ -1,7 +1,7 @@
 // Display reconstruction: vertex radiosities and a crack-free triangulation of the leaf elements.
 #pragma once
 
-#include "mesh/hierarchy.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <array>
 #include <span>

@@ -6,12 +6,12 @@
 // takes 4 bytes (`property list int int`, a count type OpenMesh's reader also takes) when a leaf has more than
 // 255 vertices on its loop. OpenMesh writes the count in one byte whatever the face, and a larger face made every
 // face and vertex after it unreadable.
-#include "mesh/export_ply.h"
+#include "aarad/mesh/export_ply.h"
 
-#include "core/atomic_file.h"
-#include "core/error.h"
-#include "mesh/display.h"
-#include "mesh/leaf_mesh.h"
+#include "aarad/core/atomic_file.h"
+#include "aarad/core/error.h"
+#include "aarad/mesh/display.h"
+#include "aarad/mesh/leaf_mesh.h"
 
 #include <algorithm>
 #include <bit>

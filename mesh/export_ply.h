@@ -2,8 +2,8 @@
 // radiosity_r, radiosity_g, radiosity_b, level, patch (the output contract of ../shared/design.md).
 #pragma once
 
-#include "mesh/display.h"
-#include "mesh/hierarchy.h"
+#include "aarad/mesh/display.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <array>
 #include <cstdint>

@@ -5,12 +5,12 @@
 // usable: automatic preprocessing and meshing techniques for the generation of accurate radiosity solutions",
 // section 4: an unrefined neighbour keeps the new vertex on its edge; balanced subdivision keeps neighbours
 // within one level). The choices (no deletion, child order, defaults) are in docs/hierarchy.md.
-#include "mesh/hierarchy.h"
+#include "aarad/mesh/hierarchy.h"
 
-#include "core/error.h"
-#include "core/polygon.h"
-#include "mesh/initial_meshing.h"
-#include "mesh/leaf_mesh.h"
+#include "aarad/core/error.h"
+#include "aarad/core/polygon.h"
+#include "aarad/mesh/initial_meshing.h"
+#include "aarad/mesh/leaf_mesh.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,9 +6,9 @@
 // The implementation may add members; it must not change the meaning of these.
 #pragma once
 
-#include "core/math.h"
-#include "core/rgb.h"
-#include "core/scene.h"
+#include "aarad/core/math.h"
+#include "aarad/core/rgb.h"
+#include "aarad/core/scene.h"
 
 #include <array>
 #include <cstdint>

@@ -4,11 +4,11 @@
 // one convex quadrilateral or one triangle (one face, or faces tiling one) gets a grid of patches; others are
 // triangulated with CGAL's constrained Delaunay mesher (Shewchuk's / Ruppert's refinement, CGAL 2D Conforming
 // Triangulations and Meshes, Delaunay_mesher_2).
-#include "mesh/initial_meshing.h"
+#include "aarad/mesh/initial_meshing.h"
 
-#include "core/error.h"
-#include "core/polygon.h"
-#include "core/predicates.h"
+#include "aarad/core/error.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/predicates.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_mesh_face_base_2.h>

@@ -2,9 +2,9 @@
 // Brock 1986: patches shoot, elements receive). See docs/hierarchy.md for the choices.
 #pragma once
 
-#include "core/scene.h"
-#include "mesh/contact_lines.h"
-#include "mesh/hierarchy.h"
+#include "aarad/core/scene.h"
+#include "aarad/mesh/contact_lines.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <array>
 #include <cstdint>

@@ -1,10 +1,10 @@
 // The subdivision-invariant checker (../shared/design.md, "Subdivision invariants"; docs/hierarchy.md lists
 // each invariant with its tolerance). Every loop over the half-edge structure is capped, so a corrupted mesh
 // is reported, never walked forever.
-#include "mesh/invariants.h"
+#include "aarad/mesh/invariants.h"
 
-#include "core/polygon.h"
-#include "mesh/leaf_mesh.h"
+#include "aarad/core/polygon.h"
+#include "aarad/mesh/leaf_mesh.h"
 
 #include <CGAL/box_intersection_d.h>
 

@@ -1,8 +1,8 @@
 // The public subdivision-invariant checker (see docs/ and ../shared/design.md for the list).
 #pragma once
 
-#include "mesh/display.h"
-#include "mesh/hierarchy.h"
+#include "aarad/mesh/display.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <string>
 #include <vector>

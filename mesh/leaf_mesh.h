@@ -9,7 +9,7 @@
 // the life of the hierarchy.
 #pragma once
 
-#include "mesh/hierarchy.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 

@@ -1,5 +1,5 @@
 // Rows of form factors per shooting patch, within a memory budget (factor_cache.h).
-#include "refine/factor_cache.h"
+#include "aarad/refine/factor_cache.h"
 
 #include <utility>
 

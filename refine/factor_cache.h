@@ -7,7 +7,7 @@
 // within one shot. Rows are kept within a memory budget, the least recently used given up first.
 #pragma once
 
-#include "mesh/hierarchy.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -1,10 +1,10 @@
 // The near-field correction of a shot (see near_field.h): Wallace, Elmquist and Haines 1989, section 3, for the
 // receiver's side; Baum, Rushmeier and Winget 1989, eq. 9, for the point-to-polygon factors.
-#include "refine/near_field.h"
+#include "aarad/refine/near_field.h"
 
-#include "core/polygon.h"
-#include "formfactor/analytic.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/polygon.h"
+#include "aarad/formfactor/analytic.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 
 #include <algorithm>
 #include <cmath>

@@ -39,8 +39,8 @@
 // difference as unshot flux (refine/solver.cpp). Either way the balance holds through splits.
 #pragma once
 
-#include "core/math.h"
-#include "formfactor/backend.h"
+#include "aarad/core/math.h"
+#include "aarad/formfactor/backend.h"
 
 #include <cstdint>
 #include <span>

@@ -1,5 +1,5 @@
 // Edge-neighbour table of the receivers (see neighbour_table.h).
-#include "refine/neighbour_table.h"
+#include "aarad/refine/neighbour_table.h"
 
 #include <utility>
 

@@ -6,8 +6,8 @@
 // renumbered; new leaves and leaves next to a split are asked of the hierarchy.
 #pragma once
 
-#include "mesh/hierarchy.h"
-#include "refine/receiver_cache.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/refine/receiver_cache.h"
 
 #include <cstdint>
 #include <span>

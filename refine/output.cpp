@@ -1,12 +1,12 @@
 // Output files of a solve; see output.h and docs/solver.md for the tone map and what each image shows.
-#include "refine/output.h"
+#include "aarad/refine/output.h"
 
-#include "core/atomic_file.h"
-#include "core/error.h"
-#include "mesh/display.h"
-#include "mesh/export_ply.h"
-#include "refine/render.h"
-#include "refine/report.h"
+#include "aarad/core/atomic_file.h"
+#include "aarad/core/error.h"
+#include "aarad/mesh/display.h"
+#include "aarad/mesh/export_ply.h"
+#include "aarad/refine/render.h"
+#include "aarad/refine/report.h"
 
 #include <algorithm>
 #include <cerrno>

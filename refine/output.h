@@ -2,8 +2,8 @@
 // report.json, each written under a temporary name and renamed, so each is whole or absent.
 #pragma once
 
-#include "core/image.h"
-#include "refine/solver.h"
+#include "aarad/core/image.h"
+#include "aarad/refine/solver.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,5 +1,5 @@
 // Receiver view of the leaf elements (design.md: formfactor/ sees plain polygons, never the mesh).
-#include "refine/receiver_cache.h"
+#include "aarad/refine/receiver_cache.h"
 
 #include <utility>
 

@@ -15,8 +15,8 @@
 // fresh build (the points may be numbered differently).
 #pragma once
 
-#include "formfactor/receiver_view.h"
-#include "mesh/hierarchy.h"
+#include "aarad/formfactor/receiver_view.h"
+#include "aarad/mesh/hierarchy.h"
 
 #include <cstdint>
 #include <span>

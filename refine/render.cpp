@@ -1,7 +1,7 @@
 // Z-buffered scan conversion of the display triangles with perspective-correct interpolation (edge functions,
 // Pineda 1988, "A parallel algorithm for polygon rasterization"; near-plane clipping after Sutherland and
 // Hodgman 1974). See render.h for what each shading shows.
-#include "refine/render.h"
+#include "aarad/refine/render.h"
 
 #include <algorithm>
 #include <array>

@@ -7,9 +7,9 @@
 //          where the per-pixel leaf id changes, so hidden edges never show.
 #pragma once
 
-#include "core/image.h"
-#include "core/scene.h"
-#include "mesh/display.h"
+#include "aarad/core/image.h"
+#include "aarad/core/scene.h"
+#include "aarad/mesh/display.h"
 
 #include <cstdint>
 #include <vector>

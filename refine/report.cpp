@@ -1,5 +1,5 @@
 // The solve report (../shared/design.md, "solve report"); field meanings are documented in docs/solver.md.
-#include "refine/report.h"
+#include "aarad/refine/report.h"
 
 namespace aarad::refine {
 

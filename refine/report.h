@@ -6,8 +6,8 @@
 // the contract's fields keep their names and meaning.
 #pragma once
 
-#include "mesh/invariants.h"
-#include "refine/solver.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/refine/solver.h"
 
 #include <nlohmann/json.hpp>
 

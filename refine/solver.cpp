@@ -13,10 +13,10 @@
 // this shot (they inherited the parent's B), get their own share from the back end (subset = new leaves, all
 // receivers occluding), and the patch's unshot radiosity and the absorbed flux are corrected the same way.
 // The new leaves are tested again until nothing splits.
-#include "refine/solver.h"
+#include "aarad/refine/solver.h"
 
-#include "core/error.h"
-#include "core/quadrature.h"
+#include "aarad/core/error.h"
+#include "aarad/core/quadrature.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

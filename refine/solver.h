@@ -7,14 +7,14 @@
 // Formulas as in ../shared/references.md; the options and their defaults are documented in docs/solver.md.
 #pragma once
 
-#include "core/rgb.h"
-#include "core/scene.h"
-#include "formfactor/backend.h"
-#include "mesh/hierarchy.h"
-#include "refine/factor_cache.h"
-#include "refine/near_field.h"
-#include "refine/neighbour_table.h"
-#include "refine/receiver_cache.h"
+#include "aarad/core/rgb.h"
+#include "aarad/core/scene.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/refine/factor_cache.h"
+#include "aarad/refine/near_field.h"
+#include "aarad/refine/neighbour_table.h"
+#include "aarad/refine/receiver_cache.h"
 
 #include <tbb/task_group.h>
 

@@ -2,11 +2,11 @@
 // and closed forms from Howell's catalog (../shared/references.md).
 #pragma once
 
-#include "core/math.h"
-#include "core/polygon.h"
-#include "formfactor/backend.h"
-#include "formfactor/hemicube_geometry.h"
-#include "formfactor/receiver_view.h"
+#include "aarad/core/math.h"
+#include "aarad/core/polygon.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/hemicube_geometry.h"
+#include "aarad/formfactor/receiver_view.h"
 
 #include <cmath>
 #include <cstdint>

@@ -1,8 +1,8 @@
 // Small hand-built scenes for the solver tests (shared by tests/test_solver*.cpp and test_outputs*.cpp).
 #pragma once
 
-#include "core/polygon.h"
-#include "core/scene.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/scene.h"
 
 #include <algorithm>
 #include <string>

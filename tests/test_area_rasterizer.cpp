@@ -4,10 +4,10 @@
 // line. Clipping any polygon, convex or not, against a half-plane that way keeps its signed area exact
 // (the degenerate edges it may create along the cut have no area), and a pixel is an intersection of
 // half-planes. Issue 2, part 4: 1e-9 per pixel; pieces add up to the whole to 1e-12.
-#include "core/area_rasterizer.h"
+#include "aarad/core/area_rasterizer.h"
 
-#include "core/error.h"
-#include "core/polygon.h"
+#include "aarad/core/error.h"
+#include "aarad/core/polygon.h"
 
 #include <CGAL/Exact_rational.h>
 #include <gtest/gtest.h>

@@ -4,12 +4,12 @@
 // room, twelve groups, lights under the ceiling). data/scenes/<name>.obj and .mtl must equal what
 // core/obj_export.h writes for each built-in, so the files never drift from the code; to regenerate them
 // after changing a built-in, run this test with AARAD_UPDATE_SCENES=1 in the environment.
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "core/obj_export.h"
-#include "core/obj_import.h"
-#include "core/polygon.h"
-#include "core/predicates.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/core/obj_export.h"
+#include "aarad/core/obj_import.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/predicates.h"
 #include "tests/solver_test_scenes.h"
 
 #include <gtest/gtest.h>

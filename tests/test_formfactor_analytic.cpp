@@ -1,7 +1,7 @@
 // The analytic back end (Baum, Rushmeier and Winget 1989, eq. 9) against Howell's closed forms
 // (references.md): B-3, the centred square, the off-axis disk, B-2, and a closed cube.
-#include "core/error.h"
-#include "formfactor/analytic.h"
+#include "aarad/core/error.h"
+#include "aarad/formfactor/analytic.h"
 #include "formfactor_fixtures.h"
 
 #include <gtest/gtest.h>

@@ -14,7 +14,7 @@
 //   The paper writes the maximiser as A_0 = 1 - (1/(n-1))^(1/(n-2)): that is the same expression with n - 1
 //   patches in place of n (an index shift; at n = 2 it is undefined). The tests check the value, the maximiser
 //   and the shift.
-#include "formfactor/coverage_list.h"
+#include "aarad/formfactor/coverage_list.h"
 
 #include <gtest/gtest.h>
 

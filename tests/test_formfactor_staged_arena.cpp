@@ -4,7 +4,7 @@
 // order give the same walk, value for value, whatever the number of column blocks. The staged arena emits the
 // pixels whose entries all belong to one surface before the others of their block, so its output is compared
 // after a stable sort by pixel: each pixel's entries in the same order with the same values.
-#include "formfactor/coverage_list.h"
+#include "aarad/formfactor/coverage_list.h"
 
 #include <gtest/gtest.h>
 

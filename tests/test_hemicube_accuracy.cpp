@@ -1,14 +1,14 @@
 // The classical and the anti-aliased hemicube against closed forms (Howell's catalog, references.md) and the
 // analytic back end (Baum et al. eq. 9); the paper's Figure 1; the same-surface rule; occlusion; closed boxes;
 // determinism across thread counts. Chandran, Kiran, Phani and Rai, sections 1.1 and 3.2.
-#include "core/area_rasterizer.h"
-#include "formfactor/aa_hemicube.h"
-#include "formfactor/analytic.h"
-#include "formfactor/hemicube.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/area_rasterizer.h"
+#include "aarad/formfactor/aa_hemicube.h"
+#include "aarad/formfactor/analytic.h"
+#include "aarad/formfactor/hemicube.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 #include "formfactor_fixtures.h"
-#include "mesh/hierarchy.h"
-#include "refine/receiver_cache.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/refine/receiver_cache.h"
 #include "solver_test_scenes.h"
 
 #include <gtest/gtest.h>

@@ -1,9 +1,9 @@
 // Hemicube geometry: delta form-factor tables (Cohen and Greenberg 1985; references.md), the shooter's frame,
 // culling, and exact clipping to the five faces (Chandran et al. section 3.2).
-#include "core/error.h"
-#include "formfactor/analytic.h"
-#include "formfactor/backend.h"
-#include "formfactor/hemicube_geometry.h"
+#include "aarad/core/error.h"
+#include "aarad/formfactor/analytic.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/formfactor/hemicube_geometry.h"
 #include "formfactor_fixtures.h"
 
 #include <gtest/gtest.h>

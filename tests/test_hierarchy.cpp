@@ -1,13 +1,13 @@
 // Targeted tests of the patch/element hierarchy: initial meshing counts, splits, midpoint reuse, refusal,
 // balance, neighbours and radiosity inheritance. Expected numbers follow from the scene geometry by hand.
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "mesh/contact_lines.h"
-#include "mesh/hierarchy.h"
-#include "mesh/initial_meshing.h"
-#include "mesh/invariants.h"
-#include "mesh/leaf_mesh.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/mesh/contact_lines.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/mesh/initial_meshing.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/mesh/leaf_mesh.h"
+#include "aarad/refine/solver.h"
 #include "solver_test_scenes.h"
 #include "test_hierarchy_scenes.h"
 

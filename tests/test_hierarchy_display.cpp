@@ -12,12 +12,12 @@
 #pragma GCC diagnostic pop
 #endif
 
-#include "core/builtin_scenes.h"
-#include "mesh/display.h"
-#include "mesh/export_ply.h"
-#include "mesh/hierarchy.h"
-#include "mesh/invariants.h"
-#include "mesh/leaf_mesh.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/mesh/display.h"
+#include "aarad/mesh/export_ply.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/mesh/leaf_mesh.h"
 #include "test_hierarchy_scenes.h"
 
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>

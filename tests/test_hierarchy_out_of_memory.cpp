@@ -3,9 +3,9 @@
 // memory half-way left a node with four children that were never added, and the solver's finish() crashed on it
 // (a reviewer's solve under `ulimit -v`: a segmentation fault instead of exit 3 and the solution so far).
 // This program replaces the global operator new with one that fails on request, counted per thread.
-#include "core/builtin_scenes.h"
-#include "mesh/hierarchy.h"
-#include "mesh/invariants.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/mesh/invariants.h"
 #include "test_hierarchy_scenes.h"
 
 #include <gtest/gtest.h>

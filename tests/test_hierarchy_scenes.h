@@ -1,8 +1,8 @@
 // Small hand-built scenes and helpers shared by the hierarchy, split and invariant tests.
 #pragma once
 
-#include "core/scene.h"
-#include "mesh/invariants.h"
+#include "aarad/core/scene.h"
+#include "aarad/mesh/invariants.h"
 
 #include <string>
 #include <vector>

@@ -1,10 +1,10 @@
 // Every invariant broken on purpose (through Hierarchy::Impl, mesh/leaf_mesh.h) and reported by
 // check_invariants under its name; the intact structure reports nothing.
-#include "core/polygon.h"
-#include "mesh/display.h"
-#include "mesh/hierarchy.h"
-#include "mesh/invariants.h"
-#include "mesh/leaf_mesh.h"
+#include "aarad/core/polygon.h"
+#include "aarad/mesh/display.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/mesh/leaf_mesh.h"
 #include "test_hierarchy_scenes.h"
 
 #include <gtest/gtest.h>

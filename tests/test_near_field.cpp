@@ -1,12 +1,12 @@
 // The near-field correction (refine/near_field.h): a unit floor patch shooting into the wall it meets, cut into
 // small elements, against the patch-to-element factors F(A_s -> e) integrated from the elements' side; the shot's
 // total kept; receivers far away or as large as the patch only scaled; occlusion kept.
-#include "core/polygon.h"
-#include "core/quadrature.h"
-#include "formfactor/analytic.h"
-#include "formfactor/backend.h"
-#include "refine/near_field.h"
-#include "refine/solver.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/quadrature.h"
+#include "aarad/formfactor/analytic.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/refine/near_field.h"
+#include "aarad/refine/solver.h"
 #include "tests/solver_test_scenes.h"
 #include "tests/formfactor_fixtures.h"
 

@@ -6,15 +6,15 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 
-#include "core/builtin_scenes.h"
-#include "core/atomic_file.h"
-#include "core/error.h"
-#include "core/image.h"
-#include "mesh/invariants.h"
-#include "refine/output.h"
-#include "refine/render.h"
-#include "refine/report.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/atomic_file.h"
+#include "aarad/core/error.h"
+#include "aarad/core/image.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/refine/output.h"
+#include "aarad/refine/render.h"
+#include "aarad/refine/report.h"
+#include "aarad/refine/solver.h"
 #include "tests/solver_test_scenes.h"
 
 #include <OpenImageIO/imageio.h>

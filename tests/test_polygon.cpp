@@ -1,8 +1,8 @@
 // Tests of core/polygon.h and core/predicates.h against exact values: areas of known polygons, convexity
 // and simplicity (bow-tie, collinear and touching cases), and exact predicates on collinear and coplanar
 // inputs near 1e-300 and near 1e300, checked against CGAL's exact rationals.
-#include "core/polygon.h"
-#include "core/predicates.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/predicates.h"
 
 #include <CGAL/Exact_rational.h>
 #include <gtest/gtest.h>

@@ -1,13 +1,13 @@
 // Tests of the OBJ/MTL importer (core/obj_import.h) and the scene model (core/scene.h): every bad input of
 // issue 2 part 3 gives its error or warning, naming the file and line; groups and physical surfaces follow
 // the scene contract of shared/design.md; data/scenes/cornell.obj imports to the built-in Cornell box.
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "core/face_check.h"
-#include "core/obj_export.h"
-#include "core/obj_import.h"
-#include "core/polygon.h"
-#include "core/scene.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/core/face_check.h"
+#include "aarad/core/obj_export.h"
+#include "aarad/core/obj_import.h"
+#include "aarad/core/polygon.h"
+#include "aarad/core/scene.h"
 
 #include <gtest/gtest.h>
 

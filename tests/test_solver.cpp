@@ -1,10 +1,10 @@
 // The shooting loop against closed forms (references.md): two unit squares and the closed unit cube with the
 // analytic back end and one patch per face; energy balance in a closed scene; the furnace (B = 2 everywhere)
 // with the AA hemicube, and the classical hemicube's figures for comparison.
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "mesh/invariants.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/refine/solver.h"
 #include "tests/solver_test_scenes.h"
 
 #include <gtest/gtest.h>

@@ -2,10 +2,10 @@
 // gives the same numbers with 1 and 2 threads, passes check_invariants, leaves no pair of leaves too steep that
 // could still be split after any shot, and the adaptive mesh is finer along the blocks' shadow edges on the floor
 // than in the middle of the back wall.
-#include "core/builtin_scenes.h"
-#include "mesh/invariants.h"
-#include "refine/report.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/refine/report.h"
+#include "aarad/refine/solver.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

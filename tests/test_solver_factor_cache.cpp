@@ -2,11 +2,11 @@
 // leaves that stayed keep their factors, the pieces of leaves split since are shot again and share their leaf's
 // factor. Without the near-field correction, whose scale belongs to the whole shot, that is the solve with every
 // shot computed afresh, to rounding.
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "formfactor/aa_hemicube.h"
-#include "refine/receiver_cache.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/formfactor/aa_hemicube.h"
+#include "aarad/refine/receiver_cache.h"
+#include "aarad/refine/solver.h"
 #include "solver_test_scenes.h"
 
 #include <gtest/gtest.h>

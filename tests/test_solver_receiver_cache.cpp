@@ -4,11 +4,11 @@
 // build gives: the same receivers in the same order, vertex for vertex, with one shared point per distinct vertex
 // position. The neighbour table (refine/neighbour_table.h) copies lists the same way and must equal the
 // hierarchy's edge-neighbours.
-#include "core/builtin_scenes.h"
-#include "formfactor/backend.h"
-#include "mesh/hierarchy.h"
-#include "refine/neighbour_table.h"
-#include "refine/receiver_cache.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/refine/neighbour_table.h"
+#include "aarad/refine/receiver_cache.h"
 #include "solver_test_scenes.h"
 #include "test_hierarchy_scenes.h"
 

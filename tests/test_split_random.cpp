@@ -1,8 +1,8 @@
 // Property tests: hundreds of seeded random split sequences (quads, triangles, a concave L, the Cornell box;
 // with and without balance), every invariant checked after every operation.
-#include "core/builtin_scenes.h"
-#include "mesh/hierarchy.h"
-#include "mesh/invariants.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/mesh/hierarchy.h"
+#include "aarad/mesh/invariants.h"
 #include "test_hierarchy_scenes.h"
 
 #include <gtest/gtest.h>

@@ -2,11 +2,11 @@
 // group, along its normal, through any back end. The report format is the contract of shared/design.md.
 #include "apps/aarad/commands.h"
 
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "core/polygon.h"
-#include "formfactor/backend.h"
-#include "refine/report.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/core/polygon.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/refine/report.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

@@ -2,10 +2,10 @@
 // the solver will see: groups, physical surfaces, areas, materials, emitters and the import's warnings.
 #include "apps/aarad/commands.h"
 
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "core/scene.h"
-#include "refine/report.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/core/scene.h"
+#include "aarad/refine/report.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

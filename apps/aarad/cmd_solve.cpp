@@ -4,12 +4,12 @@
 // 2 usage, 3 internal error (main.cpp), 130 interrupted.
 #include "apps/aarad/commands.h"
 
-#include "core/builtin_scenes.h"
-#include "core/error.h"
-#include "mesh/invariants.h"
-#include "refine/output.h"
-#include "refine/report.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/core/error.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/refine/output.h"
+#include "aarad/refine/report.h"
+#include "aarad/refine/solver.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

@@ -1,7 +1,7 @@
 #include "apps/aarad/commands.h"
 
-#include "core/scene.h"
-#include "formfactor/backend.h"
+#include "aarad/core/scene.h"
+#include "aarad/formfactor/backend.h"
 
 #include <cerrno>
 #include <cmath>

@@ -1,7 +1,7 @@
 // aarad: the command-line program. Each sub-command lives in its own cmd_*.cpp and registers itself here.
 #include "apps/aarad/commands.h"
 
-#include "core/error.h"
+#include "aarad/core/error.h"
 
 #include <CLI/CLI.hpp>
 

@@ -1,11 +1,11 @@
 // Uses the installed library as README.md shows: a Cornell box solve, the public invariant checker, the report
 // and the output files. Exits 0 when everything holds, 1 with a message otherwise.
-#include "core/builtin_scenes.h"
-#include "formfactor/backend.h"
-#include "mesh/invariants.h"
-#include "refine/output.h"
-#include "refine/report.h"
-#include "refine/solver.h"
+#include "aarad/core/builtin_scenes.h"
+#include "aarad/formfactor/backend.h"
+#include "aarad/mesh/invariants.h"
+#include "aarad/refine/output.h"
+#include "aarad/refine/report.h"
+#include "aarad/refine/solver.h"
 
 #include <cmath>
 #include <cstdio>
