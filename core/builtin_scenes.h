@@ -10,7 +10,7 @@
 
 namespace aarad {
 
-// The Cornell box (Cornell Program of Computer Graphics; ../shared/references.md), millimetres, y up, with
+// The Cornell box (Cornell Program of Computer Graphics, "Cornell Box Data"), millimetres, y up, with
 // the official camera. Every normal points into the room (block faces point out of their blocks). The
 // non-planar left wall is deliberately split into two triangles (no warning); the light is lowered by
 // 0.1 mm so it is not coplanar with the ceiling; the floor is cut around the blocks' footprints into
@@ -25,7 +25,7 @@ Scene make_cornell_box();
 // wall_south, wall_east, wall_west, light_1, light_2, table, chair_1, chair_2, chair_3. Camera inside.
 Scene make_office();
 
-// A furnace (references.md, "Analytic radiosity solutions"): a closed 4 x 3 x 5 room (inward normals) with
+// A furnace (docs/solver.md, "Accuracy: the furnace"): a closed 4 x 3 x 5 room (inward normals) with
 // two floating blocks (six outward faces each, touching nothing; one axis-aligned, one rotated about two
 // axes). Every surface emits 1 and reflects 0.5, so the exact radiosity is B = 2 everywhere.
 // Groups: floor, ceiling, wall_north, wall_south, wall_east, wall_west, block_a, block_b.

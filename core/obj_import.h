@@ -1,4 +1,4 @@
-// OBJ/MTL import into the scene model, following the scene contract of ../shared/design.md:
+// OBJ/MTL import into the scene model (the scene format of README.md, "The program", and docs/solver.md):
 //   - each OBJ face is a polygon whose vertices run counter-clockwise seen from its lit side;
 //   - a face belongs to the group named by the nearest preceding `o` or `g` (faces before any belong to a
 //     group named after the file's stem); an `o` or `g` without a name starts a group named `unnamed_line_N`,

@@ -1,6 +1,6 @@
 // The exact point-to-polygon form factor, without occlusion: Lambert's contour formula as given by Baum,
 // Rushmeier and Winget, "Improving radiosity solutions through the use of analytically determined form
-// factors", SIGGRAPH 1989, eq. 9 (../shared/references.md).
+// factors", SIGGRAPH 1989, eq. 9 (docs/form-factors.md).
 #pragma once
 
 #include "aarad/core/math.h"

@@ -57,7 +57,7 @@ inline constexpr int kMaxResolution = 8192;
 
 // Which integral of the cosine kernel a delta form factor holds.
 enum class DeltaRule {
-  kMidpoint,   // Cohen and Greenberg: the kernel at the cell centre times the cell area (references.md)
+  kMidpoint,   // Cohen and Greenberg 1985: the kernel at the cell centre times the cell area
   kExactCell,  // the exact form factor of the cell (closed form of its corners), which sums to 1
 };
 

@@ -1,5 +1,5 @@
 // Export of the leaf mesh as binary PLY with vertex colours and per-face properties
-// radiosity_r, radiosity_g, radiosity_b, level, patch (the output contract of ../shared/design.md).
+// radiosity_r, radiosity_g, radiosity_b, level, patch (the outputs of docs/solver.md, "aarad solve").
 #pragma once
 
 #include "aarad/mesh/display.h"

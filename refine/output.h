@@ -1,4 +1,4 @@
-// The files of a solve (../shared/design.md): DIR/mesh.ply, flat.png, smooth.png, mesh.png, radiosity.exr and
+// The files of a solve (docs/solver.md, "aarad solve"): DIR/mesh.ply, flat.png, smooth.png, mesh.png, radiosity.exr and
 // report.json, each written under a temporary name and renamed, so each is whole or absent.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The solve report of ../shared/design.md as JSON: {"scene", "method", "resolution", "converged",
+// The solve report (docs/solver.md, "The report") as JSON: {"scene", "method", "resolution", "converged",
 // "interrupted", "shots", "unshot_fraction", "emitted_flux", "absorbed_flux", "patches", "elements",
 // "max_level", "seconds": {"total", "form_factors", "subdivision", "output"}, "invariants": {"violations"},
 // "groups": [{"name", "area", "elements", "mean_radiosity"}]}, colours as [r, g, b]. Extra fields (the options

@@ -4,7 +4,7 @@
 // to fast radiosity image generation", SIGGRAPH 1988, section 3. Substructuring (patches shoot, elements
 // receive, elements split where radiosity changes fast): M. F. Cohen, D. P. Greenberg, D. S. Immel and
 // P. J. Brock, "An efficient radiosity approach for realistic image synthesis", IEEE CG&A 1986.
-// Formulas as in ../shared/references.md; the options and their defaults are documented in docs/solver.md.
+// The formulas, the options and their defaults are documented in docs/solver.md.
 #pragma once
 
 #include "aarad/core/rgb.h"
@@ -41,7 +41,8 @@ struct SolverOptions {
   // progressive refinement; values in (1, 2) overshoot, which converges in fewer shots (docs/solver.md).
   double relaxation = 1.0;
   // Ambient overshooting (Feda and Purgathofer 1992): the shooter also sends rho_s times the ambient term of
-  // the unshot radiosity (references.md), an estimate of what it will receive later, and keeps its negative.
+  // the unshot radiosity (Cohen et al. 1988; docs/solver.md), an estimate of what it will receive later, and
+  // keeps its negative.
   // Off by default (the paper's method); on, the office converges in a third of the shots (docs/solver.md).
   bool overshoot = false;
   // Gauss-Legendre points per direction on the shooting patch: 1 shoots from the centroid (the paper's
@@ -154,7 +155,7 @@ class Solver {
   // not absorbed yet (escaped_flux() aside). run() stops as diverged when it passes kDivergedUnshot either way.
   double net_unshot_fraction() const;
 
-  // The display-only ambient term of Cohen et al. 1988 (references.md) and each leaf's displayed radiosity
+  // The display-only ambient term of Cohen et al. 1988 (docs/solver.md) and each leaf's displayed radiosity
   // B + rho * ambient, indexed by NodeId (inner nodes hold their B).
   Rgb ambient() const;
   std::vector<Rgb> displayed_radiosity() const;
