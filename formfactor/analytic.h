@@ -16,8 +16,9 @@ namespace aarad::formfactor {
 
 // Form factor from the differential area at `point` with unit normal `normal` to `polygon`:
 //     F = (1 / 2 pi) sum_i gamma_i normal . unit(R_{i+1} x R_i),   R_i = v_i - point,
-// gamma_i the angle between R_i and R_{i+1}. Positive when the vertices run counter-clockwise seen from
-// `point`; the polygon must lie in front of the point's plane (see clip_to_front).
+// gamma_i the angle between R_i and R_{i+1}. Signed: positive when the vertices run counter-clockwise seen from
+// `point`, the negative of the form factor when they run clockwise (the polygon's back is seen). The polygon must
+// lie in front of the point's plane (see clip_to_front).
 double polygon_form_factor(const Vec3& point, const Vec3& normal, std::span<const Vec3> polygon);
 
 // Clips a polygon given in the shooter's local coordinates (w = height above the shooter's plane, exactly

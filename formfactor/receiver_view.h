@@ -26,8 +26,10 @@ class ReceiverView {
  public:
   void clear();
   void reserve(std::size_t receivers, std::size_t vertices);
-  // Appends a receiver and returns its index. Throws aarad::Error for a polygon wound clockwise round the plane's
-  // normal, or with a corner or plane that is not finite (and then leaves the view as it was).
+  // Appends a receiver and returns its index. `plane` is the polygon's own: plane_of(polygon) (core/polygon.h)
+  // gives it, its normal on the side from which the polygon runs counter-clockwise. Throws aarad::Error for a
+  // polygon wound clockwise round the plane's normal, or with a corner or plane that is not finite (and then leaves
+  // the view as it was).
   std::uint32_t add(std::span<const Vec3> polygon, const Plane& plane, std::uint32_t surface, std::uint32_t patch);
   // The same, with a caller's key per corner (keys[k] for polygon[k]): corners with equal keys share one point.
   // Equal keys must come with equal coordinates (checked: throws aarad::Error otherwise, and leaves the view as it
