@@ -350,15 +350,15 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
     } else if (key == "f") {
       for (std::size_t i = 1; i < t.size(); ++i) {
         if (!vertex_reference(t[i]))
-          throw InputError(path, number, "face vertex '" + shown(t[i]) + "' is not a vertex reference; write v, v/vt, "
-                                         "v//vn or v/vt/vn with whole numbers other than 0 (indices count from 1, "
+          throw InputError(path, number, "face vertex '" + shown(t[i]) + "' is not a vertex reference; write v, "
+                                         "v/vt, v//vn or v/vt/vn with whole numbers other than 0 (indices count from 1, "
                                          "negative ones from the end)");
         // tinyobjloader reads indices as int: a larger one would wrap around to some other vertex.
         errno = 0;
         const long long index = std::strtoll(t[i].c_str(), nullptr, 10);
         if (errno == ERANGE || index > std::numeric_limits<int>::max() || index < -std::numeric_limits<int>::max())
-          throw InputError(path, number, "vertex index '" + shown(t[i].substr(0, t[i].find('/'))) + "' is out of range (the "
-                                         "file defines " + std::to_string(text.positions.size()) + " vertices "
+          throw InputError(path, number, "vertex index '" + shown(t[i].substr(0, t[i].find('/'))) +
+                                         "' is out of range (the file defines " + std::to_string(text.positions.size()) + " vertices "
                                          "before this line); fix the face's vertex references");
       }
       if (t.size() < 4) {
