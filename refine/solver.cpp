@@ -1093,7 +1093,7 @@ void Solver::shooting_loop(const std::function<bool(const Progress&)>& keep_goin
       break;
     }
     if (shots_ >= options_.max_shots) break;
-    if (std::abs(scan.net_unshot_fraction) > kDivergedUnshot) {
+    if (!std::isfinite(scan.net_unshot_fraction) || std::abs(scan.net_unshot_fraction) > kDivergedUnshot) {
       diverged_ = true;
       break;
     }

@@ -78,12 +78,13 @@ struct SolverOptions {
 mesh::MeshingOptions default_meshing(const Scene& scene);
 
 // run() stops when the net unshot flux, sum dB A with its sign (unshot_flux()), exceeds this many times the emitted
-// flux either way. It starts at the emitted flux and, in a scene whose form factors from every point add up to at
-// most 1, it is what has not been absorbed yet, emitted - absorbed, so it never passes the emitted flux: plain
-// shooting only lowers it, and over-relaxation and overshooting, whose negative dB are flux to be taken back, do
-// not lift it either. (Summed with |dB|, as unshot_fraction() is, it can: overshooting leaves each shooter
-// -rho x ambient, about 2 rho / (1 - rho) times what is left in all, 65 times at rho = 0.97.) Factors that add up
-// to more than 1 make flux out of nothing, and it grows without end.
+// flux either way, or is not finite. It starts at the emitted flux and is what has been neither absorbed nor lost
+// from the scene: emitted - absorbed - escaped. In a closed scene whose form factors from every point add up to at
+// most 1 it never passes the emitted flux: plain shooting only lowers it, and over-relaxation and overshooting,
+// whose negative dB are flux to be taken back, do not lift it either. (Summed with |dB|, as unshot_fraction() is,
+// it can: overshooting leaves each shooter -rho x ambient, about 2 rho / (1 - rho) times what is left in all, 65
+// times at rho = 0.97.) It grows without end where factors add up to more than 1, which makes flux out of nothing,
+// and with overshooting in an open scene, whose ambient term (a closed scene's) sends out more than comes back.
 inline constexpr double kDivergedUnshot = 10.0;
 
 struct Progress {

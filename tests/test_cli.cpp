@@ -308,6 +308,29 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   EXPECT_FALSE(fs::exists(dir / "faint"));
 }
 
+// A solve that diverges says why as far as its options tell, writes its files with "diverged": true, and exits 1.
+// Here overshooting in an open scene: a bright floor (rho 0.99) under a small lamp, most light leaving; the ambient
+// term assumes a closed scene and sends out more than comes back (a reviewer's case). The message blamed form
+// factors adding up to more than 1. Without --overshoot the same scene converges.
+TEST(Cli, OvershootingThatDivergesInAnOpenSceneSaysSo) {
+  const fs::path dir = work_dir();
+  write_file("open.mtl", "newmtl floor\nKd 0.99\nnewmtl light\nKd 0\nKe 1\n");
+  const fs::path obj = write_file("open.obj", "mtllib open.mtl\nv -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\n"
+                                              "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
+                                              "g floor\nusemtl floor\nf 1 4 3 2\ng light\nusemtl light\nf 5 6 7 8\n");
+  const std::string solve = "solve " + obj.string() + " --no-adaptive --patch-size 2 --width 8 --height 8 --quiet --out ";
+  ProgramRun r = aarad(solve + (dir / "overshoot").string() + " --overshoot");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("the solve diverged"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("solve without --overshoot"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("add up to more than 1"), std::string::npos) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "overshoot" / "report.json"));
+  EXPECT_TRUE(report["diverged"].get<bool>());
+  EXPECT_FALSE(report["converged"].get<bool>());
+  r = aarad(solve + (dir / "plain").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
 // The output directory is checked before the first shot (docs/solver.md), also where a look at what exists is not
 // enough: a symbolic link to nothing is not a directory to create, and an output file's name held by a directory
 // or a FIFO cannot take the file. Before, both solved and then failed.

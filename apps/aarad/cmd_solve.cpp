@@ -327,13 +327,23 @@ void run_solve(SolveCommandOptions options) {
   // The report describes the solve ("interrupted" when a Ctrl-C stopped the shots); a Ctrl-C while the files were
   // written also gives 130. A solve that diverged wrote what it had, for a look, and fails.
   if (solver.diverged()) {
+    // Why, as far as the options tell: overshooting's ambient term assumes a closed scene; the analytic back end's
+    // factors ignore occlusion, so from a patch that sees surfaces behind one another they add up to more than 1.
+    std::string why;
+    if (options.solver.overshoot) {
+      why = "overshooting sends rho x the ambient term on top of each shot, and that term assumes a closed scene: "
+            "where light leaves the scene it sends out more than comes back; solve without --overshoot";
+    } else if (options.solver.backend == "analytic") {
+      why = "the analytic back end ignores what hides one surface from another, so the form factors from some patch "
+            "add up to more than 1; use --ff aa-hemicube";
+    } else {
+      why = "the form factors from some patch add up to more than 1";
+      if (options.solver.relaxation > 1.0) why += ", or --relaxation sends too much back; try a smaller one";
+    }
     std::fprintf(stderr,
                  "aarad: error: the solve diverged: after %lld shots the net unshot flux is %.3g times the emitted "
-                 "flux; the form factors from some patch add up to more than 1%s\n",
-                 static_cast<long long>(solver.shots()), solver.net_unshot_fraction(),
-                 options.solver.backend == "analytic"
-                     ? " (the analytic back end ignores what hides one surface from another): use --ff aa-hemicube"
-                     : "");
+                 "flux; %s\n",
+                 static_cast<long long>(solver.shots()), solver.net_unshot_fraction(), why.c_str());
   }
   set_exit_code(g_interrupts.load() > 0 ? 130 : solver.diverged() ? 1 : 0);
 }
