@@ -163,11 +163,13 @@ std::string trim(const std::string& s) {
   return s.substr(first, last - first + 1);
 }
 
-// A word of the file as a message shows it: whole up to 64 characters, else its start and its length (a reviewer's
-// coordinate of ten million digits made a 10 MB error line).
+// A word of the file as a message shows it: whole up to 64 bytes, else its start (cut between UTF-8 characters) and
+// its length (a reviewer's coordinate of ten million digits made a 10 MB error line).
 std::string shown(const std::string& word) {
   if (word.size() <= 64) return word;
-  return word.substr(0, 48) + "... (" + std::to_string(word.size()) + " characters)";
+  std::size_t end = 48;
+  while (end > 0 && (static_cast<unsigned char>(word[end]) & 0xC0) == 0x80) --end;  // not inside a UTF-8 character
+  return word.substr(0, end) + "... (" + std::to_string(word.size()) + " bytes)";
 }
 
 // strtod over a whole token: nullopt when the token is not a number. NaN and infinity parse (and are

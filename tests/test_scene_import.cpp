@@ -257,8 +257,15 @@ TEST_F(SceneImport, import_infinite_coordinate_is_error_with_line) {
   const std::string digits(100000, '9');
   const InputError longer = import_error(write("long.obj", "v 0 0 0\nv 1 0 " + digits + "x\nv 1 1 0\nf 1 2 3\n"));
   EXPECT_EQ(longer.line(), 2);
-  EXPECT_EQ(longer.message(), "vertex coordinate '" + digits.substr(0, 48) + "... (100001 characters)' is not a "
+  EXPECT_EQ(longer.message(), "vertex coordinate '" + digits.substr(0, 48) + "... (100001 bytes)' is not a "
                               "number; write a finite decimal number");
+  // Cut between UTF-8 characters, never inside one: 47 ASCII bytes, then two-byte characters (e with an acute
+  // accent), so that byte 48 is the second byte of one.
+  std::string accents(47, 'x');
+  for (int k = 0; k < 20; ++k) accents += "\xC3\xA9";
+  const InputError accented = import_error(write("accents.obj", "v 0 0 0\nv 1 0 " + accents + "\nv 1 1 0\nf 1 2 3\n"));
+  EXPECT_NE(accented.message().find("'" + accents.substr(0, 47) + "... (87 bytes)'"), std::string::npos)
+      << accented.message();
 }
 
 TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
