@@ -261,7 +261,11 @@ Solver::PatchScan Solver::scan_patches() const {
 }
 
 double Solver::unshot_fraction() const { return scan_patches().unshot_fraction; }
-double Solver::net_unshot_fraction() const { return scan_patches().net_unshot_fraction; }
+// unshot_flux() over the emitted flux: the sums the scan makes, without the scan's choice of a shooter.
+double Solver::net_unshot_fraction() const {
+  const double emitted = emitted_flux_.sum();
+  return emitted > 0.0 ? unshot_flux().sum() / emitted : 0.0;
+}
 
 Rgb Solver::ambient() const { return scan_patches().ambient; }
 
