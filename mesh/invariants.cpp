@@ -63,6 +63,7 @@ class Checker {
       if (m_.options.balance) check_balance();
     }
     check_tiling();
+    check_surface_areas();
     check_surface_planes();
     check_radiosity();
     return std::move(violations_);
@@ -124,6 +125,37 @@ class Checker {
     }
   }
 
+  // The patches of each surface cover its area. The crack and boundary checks compare the leaf mesh with the
+  // outline it had when the hierarchy was built; this compares it with the scene, so a piece the initial
+  // meshing left out is a violation, not a hole in the outline. The meshing moves the faces' corners by up to
+  // kPlaneDistance x the diagonal (onto the surface's plane, onto one another, onto a neighbour's edge), which
+  // changes the area by at most the faces' perimeters times that; both sums also round once per term.
+  void check_surface_areas() {
+    const auto& surfaces = m_.scene().surfaces;
+    const double moved = kPlaneDistance * m_.scene().diagonal();
+    std::vector<double> covered(surfaces.size(), 0.0), perimeters(surfaces.size(), 0.0);
+    std::vector<std::size_t> terms(surfaces.size(), 0);
+    std::vector<Vec3> corners;
+    for (const NodeId p : m_.patch_ids) {
+      if (!valid_node(p) || m_.surface[p] >= surfaces.size()) continue;  // reported by check_tree
+      h_.corners(p, corners);
+      covered[m_.surface[p]] += m_.area[p];
+      perimeters[m_.surface[p]] += perimeter(corners);
+      ++terms[m_.surface[p]];
+    }
+    for (std::size_t s = 0; s < surfaces.size(); ++s) {
+      const double area = surfaces[s].area;
+      double outline = 0.0;
+      for (const std::uint32_t f : surfaces[s].faces) outline += perimeter(m_.scene().faces[f].vertices);
+      const double rounding = 4.0 * std::numeric_limits<double>::epsilon() *
+                              static_cast<double>(terms[s] + surfaces[s].faces.size()) * area;
+      const double tolerance = std::max({area_tolerance(area, perimeters[s]), rounding, outline * moved});
+      if (!(std::abs(covered[s] - area) <= tolerance))
+        report("surface-covered", kNoNode, "the patches of surface ", s, " cover ", covered[s], " of its area ", area,
+               " (", terms[s], " patches)");
+    }
+  }
+
   // The corners of every node lie in the plane of its surface. (check_tiling holds children to their parent's
   // plane; this holds the patches, and so the whole tree, to the surface's.)
   void check_surface_planes() {
@@ -157,6 +189,8 @@ class Checker {
         report("levels-parents", n, "node ", n, " has parent ", p, ", which does not exist");
         continue;
       }
+      // Bottom-up passes (Hierarchy::update_inner_radiosity, check_radiosity) visit ids in decreasing order.
+      if (p >= n) report("levels-parents", n, "node ", n, " has parent ", p, ", whose id is not smaller");
       const auto siblings = h_.children(p);
       if (std::find(siblings.begin(), siblings.end(), n) == siblings.end())
         report("levels-parents", n, "node ", n, " names parent ", p, ", which does not list it as a child");
@@ -175,6 +209,13 @@ class Checker {
           report("levels-parents", n, "node ", n, " lists child ", c, ", whose parent is not ", n);
     if (roots != m_.patch_ids.size())
       report("levels-parents", kNoNode, roots, " nodes without a parent but ", m_.patch_ids.size(), " patches");
+    std::vector<std::uint8_t> listed(m_.parent.size(), 0);
+    for (const NodeId p : m_.patch_ids) {
+      if (!valid_node(p) || m_.parent[p] != kNoNode)
+        report("levels-parents", valid_node(p) ? p : kNoNode, "the patch list names node ", p, ", which is not a root");
+      else if (listed[p]++ != 0)
+        report("levels-parents", p, "the patch list names node ", p, " twice");
+    }
   }
 
   void check_face_map() {
@@ -243,7 +284,9 @@ class Checker {
         ok = false;
       }
       if (mesh_.to_vertex_handle(h) == mesh_.from_vertex_handle(h)) {
-        report("leaf-mesh-manifold", kNoNode, "halfedge ", i, " starts and ends at vertex ", mesh_.to_vertex_handle(h).idx());
+        const FaceHandle f = mesh_.face_handle(h);
+        report("leaf-mesh-manifold", f.is_valid() ? mesh_.property(m_.face_node, f) : kNoNode, "halfedge ", i,
+               " starts and ends at vertex ", mesh_.to_vertex_handle(h).idx());
         ok = false;
       }
     }
@@ -264,6 +307,14 @@ class Checker {
     }
     if (!ok) return false;
     for (auto v : mesh_.vertices()) {
+      // The circulator starts from the vertex's own link: it must leave v, or the fan walked is another vertex's.
+      const HalfedgeHandle link = mesh_.halfedge_handle(v);
+      if (link.is_valid() && (link.idx() >= nh || halfedge_deleted(link) || mesh_.from_vertex_handle(link) != v)) {
+        report("leaf-mesh-manifold", kNoNode, "vertex ", v.idx(), " links halfedge ", link.idx(),
+               ", which does not leave it");
+        ok = false;
+        continue;
+      }
       std::size_t boundary_out = 0, out = 0;
       for (auto h : mesh_.voh_range(v)) {
         boundary_out += h.is_boundary();
@@ -272,6 +323,11 @@ class Checker {
       if (boundary_out > 1 || out == 0) {
         report("leaf-mesh-manifold", kNoNode, "vertex ", v.idx(), out == 0 ? " is isolated" : " is not manifold (",
                boundary_out, out == 0 ? "" : " boundary gaps)");
+        ok = false;
+      } else if (boundary_out == 1 && !mesh_.is_boundary(link)) {
+        // OpenMesh's is_boundary(v) and its boundary walks read only this link.
+        report("leaf-mesh-manifold", kNoNode, "boundary vertex ", v.idx(), " links inner halfedge ", link.idx(),
+               ", not its boundary halfedge");
         ok = false;
       }
     }
@@ -654,15 +710,19 @@ class Checker {
         area[n] = m_.area[n];
         peak[n] = std::max({std::abs(m_.radiosity[n].r), std::abs(m_.radiosity[n].g), std::abs(m_.radiosity[n].b)});
       } else {
+        allowed[n] += allowed_area_error_[n];
+        weight_error = std::min(std::abs(m_.area[n] - area[n]) / area[n], allowed[n]);
+        // Hierarchy::add_radiosity divides by n's own stored area, not its leaves' sum: that difference moves
+        // n's mean too.
+        const double tolerance = 2.0 * slack[n] * peak[n] + weight_error * peak[n];
         const Rgb mean = weighted[n] / area[n];
         const Rgb& b = m_.radiosity[n];
         for (int ch = 0; ch < 3; ++ch) {
           const double scale = std::max(std::abs(b[ch]), std::abs(mean[ch]));
-          if (std::abs(b[ch] - mean[ch]) > kRadiosityTolerance * scale + 2.0 * slack[n] * peak[n])
-            report("radiosity-mean", n, "node ", n, " has B[", ch, "] = ", b[ch], " but its leaves average ", mean[ch]);
+          if (!(std::abs(b[ch] - mean[ch]) <= kRadiosityTolerance * scale + tolerance))
+            report("radiosity-mean", n, "node ", n, " has B[", ch, "] = ", b[ch], " but its leaves average ", mean[ch],
+                   std::isfinite(mean[ch]) ? "" : " (no leaf below it reaches it)");
         }
-        allowed[n] += allowed_area_error_[n];
-        weight_error = std::min(std::abs(m_.area[n] - area[n]) / area[n], allowed[n]);
       }
       const NodeId p = m_.parent[n];
       if (p != kNoNode && valid_node(p) && p < n) {

@@ -1,7 +1,7 @@
 // The public subdivision-invariant checker. What each invariant asks, and its tolerance, is in docs/hierarchy.md
 // ("Invariants"); check_invariants reports them by these names: children-tile-parent, leaf-mesh-manifold, no-crack,
-// outer-boundary, surface-component, hanging-vertex-on-edge, levels-parents, face-node-map, balance (when the
-// hierarchy keeps balance), surface-plane, finite-values, radiosity-mean.
+// outer-boundary, surface-covered, surface-component, hanging-vertex-on-edge, levels-parents, face-node-map,
+// balance (when the hierarchy keeps balance), surface-plane, finite-values, radiosity-mean.
 #pragma once
 
 #include "aarad/mesh/display.h"

@@ -11,7 +11,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -179,6 +181,70 @@ TEST(InvariantBroken, HalfEdgeLinksCorrupted) {
   const auto first = mesh.halfedge_handle(f);
   mesh.set_next_halfedge_handle(first, mesh.next_halfedge_handle(mesh.next_halfedge_handle(first)));
   EXPECT_TRUE(reports(check_invariants(h), "leaf-mesh-manifold")) << describe(check_invariants(h));
+}
+
+// OpenMesh walks a vertex's fan from the one halfedge the vertex links: linked to a halfedge of another vertex,
+// the fan walked is that vertex's; linked to an inner halfedge, a boundary vertex reads as inner (is_boundary).
+TEST(InvariantBroken, VertexLinksAHalfedgeThatDoesNotLeaveItOrIsNotItsBoundary) {
+  Hierarchy h = refined();
+  LeafMesh& mesh = h.impl().mesh;
+  const auto corner = LeafMesh::VertexHandle(vertex_at(h, Vec3(1, 0, 0)));  // on the outer boundary
+  const auto inner = LeafMesh::VertexHandle(vertex_at(h, Vec3(1.5, 0.5, 0)));  // inside R
+  ASSERT_TRUE(corner.is_valid() && inner.is_valid());
+  ASSERT_TRUE(mesh.is_boundary(corner));
+  const auto own = mesh.halfedge_handle(corner);
+  mesh.set_halfedge_handle(corner, mesh.halfedge_handle(inner));
+  EXPECT_TRUE(reports_message(check_invariants(h), "leaf-mesh-manifold", "which does not leave it"))
+      << describe(check_invariants(h));
+  mesh.set_halfedge_handle(corner, own);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  for (auto out : mesh.voh_range(corner))
+    if (!mesh.is_boundary(out)) {
+      mesh.set_halfedge_handle(corner, out);
+      break;
+    }
+  ASSERT_FALSE(mesh.is_boundary(corner));
+  EXPECT_TRUE(reports_message(check_invariants(h), "leaf-mesh-manifold", "not its boundary halfedge"))
+      << describe(check_invariants(h));
+}
+
+// The leaf mesh is compared with the scene, not only with the outline taken when it was built: a unit square's
+// mesh, given the 2 x 1 rectangle of the same plane as its scene, leaves half of the surface uncovered.
+TEST(InvariantBroken, PatchesThatDoNotCoverTheirSurface) {
+  MeshingOptions o;
+  o.patch_size = 2.0;
+  o.element_size = 1.0;
+  Hierarchy rectangle(test::rectangle_scene(), o), half(test::square_scene(), o);
+  ASSERT_TRUE(check_invariants(half).empty()) << describe(check_invariants(half));
+  half.impl().scene_ptr = rectangle.impl().scene_ptr;
+  EXPECT_TRUE(reports_message(check_invariants(half), "surface-covered", "cover 1 of its area 2"))
+      << describe(check_invariants(half));
+}
+
+// Node ids 3 and 10 swapped with every link kept: parent 10 now has children 3, 7, 8 and 9 of smaller ids, which
+// the bottom-up passes (update_inner_radiosity, the mean check) would visit before it. A patch list that names a
+// leaf instead of a root is reported too.
+TEST(InvariantBroken, ChildWithASmallerIdThanItsParentOrAPatchListNamingALeaf) {
+  Hierarchy h = refined();
+  Hierarchy::Impl& m = h.impl();
+  const NodeId a = 3, b = 10;
+  ASSERT_EQ(m.parent[a], 2u);
+  ASSERT_EQ(m.child_count[b], 0u);
+  const auto swap = [&](auto& values) { std::swap(values[a], values[b]); };
+  swap(m.parent), swap(m.child_begin), swap(m.child_count), swap(m.level), swap(m.patch_of), swap(m.surface);
+  swap(m.corners), swap(m.area), swap(m.radiosity), swap(m.unshot), swap(m.face), swap(m.loop_revision);
+  const auto renamed = [&](NodeId& n) { n = n == a ? b : n == b ? a : n; };
+  for (NodeId& n : m.parent) renamed(n);
+  for (NodeId& n : m.child_ids) renamed(n);
+  for (auto f : m.mesh.faces()) renamed(m.mesh.property(m.face_node, f));
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(reports_message(violations, "levels-parents", "whose id is not smaller")) << describe(violations);
+  EXPECT_TRUE(reports_message(violations, "radiosity-mean", "no leaf below it reaches it")) << describe(violations);
+
+  Hierarchy g = refined();
+  g.impl().patch_ids[0] = left_leaf(g);
+  EXPECT_TRUE(reports_message(check_invariants(g), "levels-parents", "which is not a root"))
+      << describe(check_invariants(g));
 }
 
 TEST(InvariantBroken, HoleInTheLeafMeshIsACrack) {
@@ -395,6 +461,37 @@ TEST(InvariantBroken, FarFromTheOriginTolerancesFollowThePositionError) {
   h.radiosity(leaf).g /= 1.0 + 1e-5;
   h.impl().area[leaf] *= 1.0 + 1e-4;  // far more than the position error moves an area
   EXPECT_TRUE(reports_message(check_invariants(h), "children-tile-parent", "stores area"));
+}
+
+// Hierarchy::add_radiosity divides by a node's stored area, which far from the origin may differ from the sum of its
+// leaves' areas by what check_tiling allows (1.3e-8 relative here): the mean it keeps is not a violation. A 2 x 1
+// rectangle turned by 30 degrees a million units from the origin, split at random and lit leaf by leaf.
+TEST(InvariantBroken, FarFromTheOriginLeavesLitOneByOneKeepTheirMean) {
+  const double x = 1e6, y = 1e6, c = std::cos(0.5236), s = std::sin(0.5236);
+  const auto at = [&](double u, double v) { return Vec2(x + c * u - s * v, y + s * u + c * v); };
+  MeshingOptions o;
+  o.patch_size = 0.7;
+  o.element_size = 0.3;
+  Hierarchy h(test::polygon_scene({at(0, 0), at(2, 0), at(2, 1), at(0, 1)}), o);
+  std::mt19937_64 random(1);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (NodeId n : h.leaves()) h.radiosity(n) = Rgb(unit(random));
+  h.update_inner_radiosity();
+  std::vector<NodeId> recent;
+  for (int step = 0; step < 300; ++step) {
+    const auto leaves = h.leaves();
+    const NodeId target = !recent.empty() && unit(random) < 0.85 ? recent[random() % recent.size()]
+                                                                   : leaves[random() % leaves.size()];
+    const SplitResult split = h.split(target);
+    recent = split.ok ? split.children : std::vector<NodeId>{};
+    if (step % 3 == 0) h.add_radiosity(h.leaves()[random() % h.leaf_count()], Rgb(unit(random)));
+  }
+  EXPECT_GT(h.leaf_count(), 500u);
+  const auto violations = check_invariants(h);
+  EXPECT_TRUE(violations.empty()) << violations.size() << " violations, the first: " << describe(violations).substr(0, 300);
+  const NodeId leaf = h.leaves()[11];
+  h.radiosity(leaf).g *= 1.0 + 1e-5;  // a leaf changed without its ancestors
+  EXPECT_TRUE(reports(check_invariants(h), "radiosity-mean"));
 }
 
 TEST(InvariantBroken, StoredAreaWrong) {
