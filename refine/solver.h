@@ -68,7 +68,7 @@ struct SolverOptions {
   // Patch and element sizes, max level, min area, balance. The default is the hierarchy's (zeros: sizes relative
   // to the scene's diagonal), not what `aarad solve` uses for a scene that names its sizes (the built-in Cornell
   // box and office, an OBJ file with "# aarad meshing:"): set it to default_meshing(scene) to solve as the program
-  // does (on the Cornell box 1 040 initial elements and 1 133 leaves at the end, against 1 332 and 3 183).
+  // does (on the Cornell box 1 040 initial elements and 1 154 leaves at the end, against 1 332 and 2 190).
   mesh::MeshingOptions meshing;
 };
 

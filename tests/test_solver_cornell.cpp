@@ -188,7 +188,7 @@ TEST(SolverElementLimit, SplittingStopsAtTheLimitAndTheSolveConvergesWithItsMesh
   }
 }
 
-// A limit the solve never goes beyond changes nothing: the default solve ends with 1 133 leaves, and so does one
+// A limit the solve never goes beyond changes nothing: the default solve ends with 1 154 leaves, and so does one
 // limited to exactly that many, with the same radiosities bit for bit.
 TEST(SolverElementLimit, ALimitTheSolveDoesNotExceedChangesNothingAndIsNotReported) {
   const CornellRun& unlimited = one_thread();
