@@ -163,6 +163,7 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
       // Integer options: a fraction, an exponent or trailing letters is not a whole number, whatever its range.
       {"solve --max-level 1.5", "Value 1.5 must be a whole number in [1, 60]"},
       {"solve --max-shots 1e3", "Value 1e3 must be a whole number >= 0"},
+      {"solve --max-shots 99999999999999999999", "is beyond a 64-bit integer: it must be a whole number in [0, "},
       {"solve --resolution 100.5", "must be a whole number in [2, 8192]"},
       {"solve --resolution 1", "must be a whole number in [2, 8192]"},
       {"solve --threads 2x", "must be a whole number in [0, 1024]"},
@@ -173,7 +174,7 @@ TEST(Cli, OutOfRangeOrNanOptionValuesExitTwoAndSayWhatIsAllowed) {
       {"solve --max-elements -4", "Value -4 must be a whole number >= 1"},
       {"solve --max-elements 2.5", "Value 2.5 must be a whole number >= 1"},
       {"solve --max-elements 4e6", "Value 4e6 must be a whole number >= 1"},
-      {"solve --max-elements 99999999999999999999", "must be a whole number >= 1"},
+      {"solve --max-elements 99999999999999999999", "is beyond a 64-bit integer: it must be a whole number in [1, "},
       {"formfactors cornell --from light --resolution 2.0", "must be a whole number in [2, 8192]"},
   };
   for (const auto& [command, expected] : cases) {

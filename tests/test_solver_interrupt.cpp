@@ -1,6 +1,6 @@
 // Ctrl-C: the real `aarad solve` run as a child process, sent SIGINT after its first progress line, stops after
 // the current shot, writes whole files and an honest report ("interrupted": true, "converged": false), and exits
-// with 130 (docs/solver.md).
+// with 130 (docs/solver.md). SIGTERM and SIGHUP do the same, with 143 and 129.
 // OpenMesh's PropertyT<VectorT<unsigned char, 3>>::push_back trips GCC 12's -Wmaybe-uninitialized when
 // instantiated here (a false positive in a system header; see test_outputs.cpp).
 #if defined(__GNUC__) && !defined(__clang__)  // a GCC warning; Clang has no such group
@@ -28,13 +28,13 @@ namespace {
 namespace fs = std::filesystem;
 
 // `aarad solve ARGS` started as a child process whose stderr the test reads through a pipe (a pipe, not a terminal:
-// progress comes as lines, the first one after the first shot). With `ignore_sigint` the child starts with SIGINT
-// ignored, as a shell starts a background job.
+// progress comes as lines, the first one after the first shot). With `ignored` the child starts with that signal
+// ignored, as a shell starts a background job (SIGINT) or `nohup` a command (SIGHUP).
 struct SolveChild {
   pid_t pid = -1;
   FILE* err = nullptr;
 };
-SolveChild start_solve(std::vector<std::string> args, bool ignore_sigint = false) {
+SolveChild start_solve(std::vector<std::string> args, int ignored = 0) {
   const std::string binary = AARAD_BINARY_DIR "/apps/aarad/aarad";
   EXPECT_TRUE(fs::exists(binary)) << binary;
   args.insert(args.begin(), {binary, "solve"});
@@ -48,7 +48,7 @@ SolveChild start_solve(std::vector<std::string> args, bool ignore_sigint = false
     dup2(stderr_pipe[1], STDERR_FILENO);
     close(stderr_pipe[0]);
     close(stderr_pipe[1]);
-    if (ignore_sigint) std::signal(SIGINT, SIG_IGN);  // kept across exec
+    if (ignored != 0) std::signal(ignored, SIG_IGN);  // kept across exec
     execv(binary.c_str(), argv.data());
     _exit(127);
   }
@@ -56,8 +56,9 @@ SolveChild start_solve(std::vector<std::string> args, bool ignore_sigint = false
   return {child, child > 0 ? fdopen(stderr_pipe[0], "r") : nullptr};
 }
 
-TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "cornell";
+// A solve sent `signal` after its first progress line: whole files, an honest report, exit 128 + the signal.
+void expect_interrupted_by(int signal, const std::string& label) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("cornell-" + std::to_string(signal));
   fs::remove_all(out);
   const auto [child, child_stderr] = start_solve({"cornell", "--converge", "1e-9", "--max-shots", "1000000", "--width",
                                                   "96", "--height", "96", "--out", out.string()});
@@ -69,7 +70,7 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
   while (std::fgets(line, sizeof line, child_stderr) != nullptr) {
     everything += line;
     if (!signalled && std::string(line).rfind("aarad: shot ", 0) == 0) {
-      ASSERT_EQ(kill(child, SIGINT), 0);
+      ASSERT_EQ(kill(child, signal), 0);
       signalled = true;
     }
   }
@@ -78,8 +79,8 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
   ASSERT_EQ(waitpid(child, &status, 0), child);
   ASSERT_TRUE(signalled) << "no progress line seen; stderr:\n" << everything;
   ASSERT_TRUE(WIFEXITED(status)) << everything;
-  EXPECT_EQ(WEXITSTATUS(status), 130) << everything;
-  EXPECT_NE(everything.find("interrupted"), std::string::npos) << everything;
+  EXPECT_EQ(WEXITSTATUS(status), 128 + signal) << everything;
+  EXPECT_NE(everything.find("aarad: interrupted by " + label + " after "), std::string::npos) << everything;
 
   // Whole files, nothing half-written or temporary.
   std::set<std::string> names;
@@ -121,13 +122,50 @@ TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) {
   EXPECT_GT(report["elements"].get<long long>(), 0);
 }
 
+TEST(SolverInterrupt, SigintWritesWholeFilesAndAnHonestReport) { expect_interrupted_by(SIGINT, "Ctrl-C"); }
+
+// A batch system stops a job with SIGTERM, a closed terminal with SIGHUP: before, either ended the program at once,
+// with nothing written (and a temporary file left when it came while a file was written).
+TEST(SolverInterrupt, SigtermAndSighupStopTheSolveAsCtrlCDoes) {
+  expect_interrupted_by(SIGTERM, "SIGTERM");
+  expect_interrupted_by(SIGHUP, "SIGHUP");
+}
+
+// Under `nohup` (SIGHUP ignored), a SIGHUP changes nothing.
+TEST(SolverInterrupt, AnIgnoredSighupStaysIgnored) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "nohup";
+  fs::remove_all(out);
+  const auto [child, child_stderr] =
+      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, SIGHUP);
+  ASSERT_GT(child, 0);
+  ASSERT_NE(child_stderr, nullptr);
+  std::string everything;
+  char line[4096];
+  int signals = 0;
+  while (std::fgets(line, sizeof line, child_stderr) != nullptr) {
+    everything += line;
+    if (std::string(line).rfind("aarad: shot ", 0) == 0 && signals < 3) {
+      ASSERT_EQ(kill(child, SIGHUP), 0);
+      ++signals;
+    }
+  }
+  std::fclose(child_stderr);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_GT(signals, 0) << "no progress line seen; stderr:\n" << everything;
+  ASSERT_TRUE(WIFEXITED(status)) << everything;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << everything;
+  std::ifstream in(out / "report.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["shots"].get<long long>(), 300);
+}
+
 // A SIGINT the parent set to be ignored stays ignored: a shell starts a background job (`aarad solve ... &`) so, and
 // a Ctrl-C meant for the script that started it stopped the solve (exit 130, "interrupted": true).
 TEST(SolverInterrupt, AnIgnoredSigintStaysIgnored) {
   const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "ignored";
   fs::remove_all(out);
   const auto [child, child_stderr] =
-      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, true);
+      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, SIGINT);
   ASSERT_GT(child, 0);
   ASSERT_NE(child_stderr, nullptr);
   std::string everything;
@@ -282,6 +320,33 @@ TEST(SolverInterrupt, ASecondSigintWhileWritingStopsAfterTheFileBeingWrittenAndL
   for (const std::string& name : names) EXPECT_NE(name[0], '.') << "a temporary file: " << name;
   EXPECT_EQ(names.count("report.json"), 0u);
   EXPECT_EQ(names.count("mesh.ply"), 1u);
+  for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
+    if (names.count(image) != 0) expect_whole_image(out / image, 2048);
+  }
+  fs::remove_all(out);
+}
+
+// SIGTERM while the files are written, then Ctrl-C: the first lets the writing go on, the second stops it after the
+// file being written, with no temporary left; the exit code is the first signal's, 143.
+TEST(SolverInterrupt, SigtermWhileWritingThenCtrlCStopsAfterTheFileBeingWritten) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("sigterm-" + std::to_string(getpid()));
+  WritingChild child(out);
+  ASSERT_GT(child.pid, 0);
+  ASSERT_NE(child.err, nullptr);
+  ASSERT_TRUE(child.wait_for(out / "mesh.ply")) << "mesh.ply never appeared";
+  ASSERT_EQ(kill(child.pid, SIGTERM), 0);
+  if (child.read_until("aarad: SIGTERM:")) {
+    ASSERT_EQ(kill(child.pid, SIGINT), 0);
+  }
+  const int status = child.finish();
+  ASSERT_TRUE(WIFEXITED(status)) << child.everything;
+  EXPECT_EQ(WEXITSTATUS(status), 143) << child.everything;
+  EXPECT_NE(child.everything.find("aarad: SIGTERM: writing the files to the end; SIGTERM again"), std::string::npos)
+      << child.everything;
+  EXPECT_NE(child.everything.find("aarad: stopped by Ctrl-C; wrote mesh.ply"), std::string::npos) << child.everything;
+  const std::set<std::string> names = names_in(out);
+  for (const std::string& name : names) EXPECT_NE(name[0], '.') << "a temporary file: " << name;
+  EXPECT_EQ(names.count("report.json"), 0u);
   for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
     if (names.count(image) != 0) expect_whole_image(out / image, 2048);
   }

@@ -1,7 +1,7 @@
 // `aarad solve [SCENE]`: progressive-refinement radiosity with adaptive substructuring (refine/solver.h),
 // progress on stderr, Ctrl-C to stop after the current shot, and the output files of ../shared/design.md.
 // Exit codes (docs/solver.md): 0 converged or stopped at --max-shots, 1 bad input or output (stdout in main.cpp),
-// 2 usage, 3 internal error (main.cpp), 130 interrupted.
+// 2 usage, 3 internal error (main.cpp), 130 interrupted by Ctrl-C (143 by SIGTERM, 129 by SIGHUP).
 #include "apps/aarad/commands.h"
 
 #include "aarad/core/builtin_scenes.h"
@@ -33,55 +33,118 @@
 namespace aarad::app {
 namespace {
 
-// Ctrl-C (docs/solver.md). During the solve the first stops it after the current shot, and the second ends the
-// program at once (SA_RESETHAND: the default action), as nothing is being written yet. Once the solve is over,
-// files are being written, and a Ctrl-C must not end the program in the middle of one (its temporary would stay
-// behind): the first lets every file be written, the next stops after the file being written. Any Ctrl-C makes the
-// exit code 130.
+// Ctrl-C (SIGINT), and SIGTERM and SIGHUP alike (docs/solver.md): a batch system or a closed terminal asks a
+// solve to stop the same way. During the solve the first stops it after the current shot, and the second ends the
+// program at once (the default action), as nothing is being written yet. Once the solve is over, files are being
+// written, and a signal must not end the program in the middle of one (its temporary would stay behind): the first
+// lets every file be written, the next stops after the file being written. The exit code is 128 + the first
+// signal's number: 130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP.
+constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP};
 std::atomic<int> g_interrupts{0};
+std::atomic<int> g_first_signal{0};
+std::atomic<int> g_last_signal{0};
+std::atomic<unsigned> g_handled_signals{0};  // bit k: kStopSignals[k] has a handler of ours
 std::atomic<bool> g_quiet{false};
-static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free,
-              "the SIGINT handlers need lock-free atomics");
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free &&
+                  std::atomic<unsigned>::is_always_lock_free,
+              "the signal handlers need lock-free atomics");
 
-extern "C" void on_sigint_while_solving(int) { g_interrupts.fetch_add(1); }
-
-extern "C" void on_sigint_while_writing(int) {
-  const int interrupts = g_interrupts.fetch_add(1) + 1;
-  if (g_quiet.load()) return;
-  // write(2) is async-signal-safe, stdio is not.
-  static constexpr char kFirst[] =
-      "aarad: Ctrl-C: writing the files to the end; Ctrl-C again to stop after the file being written\n";
-  static constexpr char kAgain[] = "aarad: Ctrl-C: stopping after the file being written\n";
-  if (interrupts == 1) {
-    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kFirst, sizeof kFirst - 1);
-  } else {
-    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kAgain, sizeof kAgain - 1);
+// How the messages name a signal.
+const char* signal_label(int signal) {
+  switch (signal) {
+    case SIGINT: return "Ctrl-C";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return "a signal";
   }
 }
 
-// Handles SIGINT with the handler given last to handle(), and restores the previous handling when it ends. A SIGINT
-// the parent set to be ignored stays ignored: a shell runs a background job (`aarad solve ... &`) so, and a Ctrl-C
-// meant for the script that started it interrupted the solve.
-class SigintGuard {
- public:
-  SigintGuard() { sigaction(SIGINT, nullptr, &previous_); }
-  ~SigintGuard() { sigaction(SIGINT, &previous_, nullptr); }
-  SigintGuard(const SigintGuard&) = delete;
-  SigintGuard& operator=(const SigintGuard&) = delete;
+// Counts the signal; returns how many have come.
+int note_signal(int signal) {
+  int none = 0;
+  g_first_signal.compare_exchange_strong(none, signal);
+  g_last_signal.store(signal);
+  return g_interrupts.fetch_add(1) + 1;
+}
 
-  // SA_RESTART: a write to a pipe that a Ctrl-C interrupts goes on instead of failing with EINTR.
-  void handle(void (*handler)(int), int flags) {
-    if (previous_.sa_handler == SIG_IGN && !(previous_.sa_flags & SA_SIGINFO)) return;
+extern "C" void on_signal_while_solving(int signal) {
+  note_signal(signal);
+  // A second stop signal of any of the three ends the program: each goes back to its default action.
+  // (sigaction is async-signal-safe.)
+  for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
+    if ((g_handled_signals.load() >> k & 1u) == 0) continue;
     struct sigaction action {};
-    action.sa_handler = handler;
+    action.sa_handler = SIG_DFL;
     sigemptyset(&action.sa_mask);
-    action.sa_flags = flags | SA_RESTART;
-    sigaction(SIGINT, &action, nullptr);
+    sigaction(kStopSignals[k], &action, nullptr);
+  }
+}
+
+// Appends `text` to buffer[at..] within `size` bytes; async-signal-safe (no library call).
+std::size_t append(char* buffer, std::size_t size, std::size_t at, const char* text) {
+  while (*text != '\0' && at < size) buffer[at++] = *text++;
+  return at;
+}
+
+extern "C" void on_signal_while_writing(int signal) {
+  const int interrupts = note_signal(signal);
+  if (g_quiet.load()) return;
+  // write(2) is async-signal-safe, stdio is not.
+  const char* label = signal_label(signal);
+  char line[160];
+  std::size_t n = append(line, sizeof line, 0, "aarad: ");
+  n = append(line, sizeof line, n, label);
+  if (interrupts == 1) {
+    n = append(line, sizeof line, n, ": writing the files to the end; ");
+    n = append(line, sizeof line, n, label);
+    n = append(line, sizeof line, n, " again to stop after the file being written\n");
+  } else {
+    n = append(line, sizeof line, n, ": stopping after the file being written\n");
+  }
+  [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, line, n);
+}
+
+// Handles the stop signals with the handler given last to handle(), and restores the previous handling when it
+// ends. A signal the parent set to be ignored stays ignored: a shell runs a background job (`aarad solve ... &`)
+// with SIGINT ignored, and a Ctrl-C meant for the script that started it interrupted the solve; `nohup` ignores
+// SIGHUP.
+class StopSignalGuard {
+ public:
+  StopSignalGuard() {
+    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) sigaction(kStopSignals[k], nullptr, &previous_[k]);
+  }
+  ~StopSignalGuard() {
+    g_handled_signals.store(0);
+    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) sigaction(kStopSignals[k], &previous_[k], nullptr);
+  }
+  StopSignalGuard(const StopSignalGuard&) = delete;
+  StopSignalGuard& operator=(const StopSignalGuard&) = delete;
+
+  // SA_RESTART: a write to a pipe that a signal interrupts goes on instead of failing with EINTR.
+  void handle(void (*handler)(int)) {
+    unsigned handled = 0;
+    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
+      if (previous_[k].sa_handler == SIG_IGN && !(previous_[k].sa_flags & SA_SIGINFO)) continue;
+      handled |= 1u << k;
+    }
+    g_handled_signals.store(handled);
+    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
+      if ((handled >> k & 1u) == 0) continue;
+      struct sigaction action {};
+      action.sa_handler = handler;
+      sigemptyset(&action.sa_mask);
+      for (const int other : kStopSignals) sigaddset(&action.sa_mask, other);  // one handler at a time
+      action.sa_flags = SA_RESTART;
+      sigaction(kStopSignals[k], &action, nullptr);
+    }
   }
 
  private:
-  struct sigaction previous_ {};
+  struct sigaction previous_[std::size(kStopSignals)] {};
 };
+
+// The exit code after a stop signal: 128 + the first one's number.
+int signal_exit_code() { return 128 + g_first_signal.load(); }
 
 struct SolveCommandOptions {
   std::string scene = "cornell";
@@ -201,22 +264,24 @@ void run_solve(SolveCommandOptions options) {
   ProgressPrinter printer(show_progress, solver_options.converge);
   {
     g_interrupts.store(0);
+    g_first_signal.store(0);
     g_quiet.store(options.quiet);
-    SigintGuard sigint;
-    sigint.handle(on_sigint_while_solving, SA_RESETHAND);
+    StopSignalGuard signals;
+    signals.handle(on_signal_while_solving);
     solver.run([&](const refine::Progress& progress) {
       printer.update(progress);
       return g_interrupts.load() == 0;
     });
-    // From here on, files are written: no Ctrl-C ends the program in the middle of one.
-    sigint.handle(on_sigint_while_writing, 0);
+    // From here on, files are written: no signal ends the program in the middle of one.
+    signals.handle(on_signal_while_writing);
     const auto keep_writing = [] { return g_interrupts.load() < 2; };
     printer.finish();
     if (solver.interrupted() && !options.quiet) {
+      const char* label = signal_label(g_first_signal.load());
       std::fprintf(stderr,
-                   "aarad: interrupted after %lld shots; writing the solution so far (Ctrl-C again to stop after "
+                   "aarad: interrupted by %s after %lld shots; writing the solution so far (%s again to stop after "
                    "the file being written)\n",
-                   static_cast<long long>(solver.shots()));
+                   label, static_cast<long long>(solver.shots()), label);
     }
 
     // Flux shot past every receiver. All of it, with shots made, is nearly always a scene whose emitters face
@@ -290,11 +355,11 @@ void run_solve(SolveCommandOptions options) {
       if (!options.quiet) {
         std::string written;
         for (const std::filesystem::path& file : files.files) written += " " + file.filename().string();
-        std::fprintf(stderr, "aarad: stopped by Ctrl-C; %s\n",
+        std::fprintf(stderr, "aarad: stopped by %s; %s\n", signal_label(g_last_signal.load()),
                      written.empty() ? "no file written"
                                      : ("wrote" + written + " in " + out.string() + "/, not the rest").c_str());
       }
-      set_exit_code(130);
+      set_exit_code(signal_exit_code());
       return;
     }
     const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -324,8 +389,8 @@ void run_solve(SolveCommandOptions options) {
                    out.string().c_str());
     }
   }
-  // The report describes the solve ("interrupted" when a Ctrl-C stopped the shots); a Ctrl-C while the files were
-  // written also gives 130. A solve that diverged wrote what it had, for a look, and fails.
+  // The report describes the solve ("interrupted" when a signal stopped the shots); a signal while the files were
+  // written also gives 128 + its number. A solve that diverged wrote what it had, for a look, and fails.
   if (solver.diverged()) {
     // Why, as far as the options tell: overshooting's ambient term assumes a closed scene; the analytic back end's
     // factors ignore occlusion, so from a patch that sees surfaces behind one another they add up to more than 1.
@@ -345,7 +410,7 @@ void run_solve(SolveCommandOptions options) {
                  "flux; %s\n",
                  static_cast<long long>(solver.shots()), solver.net_unshot_fraction(), why.c_str());
   }
-  set_exit_code(g_interrupts.load() > 0 ? 130 : solver.diverged() ? 1 : 0);
+  set_exit_code(g_interrupts.load() > 0 ? signal_exit_code() : solver.diverged() ? 1 : 0);
 }
 
 }  // namespace

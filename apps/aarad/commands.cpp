@@ -79,6 +79,10 @@ CLI::Validator whole_number_in(long long low, long long high) {
         const bool whole = sign < text.size() && text.find_first_not_of("0123456789", sign) == std::string::npos;
         errno = 0;
         const long long value = whole ? std::strtoll(text.c_str(), nullptr, 10) : 0;
+        if (whole && errno == ERANGE) {
+          return "Value " + text + " is beyond a 64-bit integer: it must be a whole number in [" +
+                 std::to_string(low) + ", " + std::to_string(high) + "]";
+        }
         if (!whole || errno != 0 || value < low || value > high) {
           return "Value " + text + " must be a whole number " + wanted;
         }

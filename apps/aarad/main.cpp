@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -99,12 +100,12 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   const int code = run(argc, argv);
-  // Output on stdout (a report, --help) that did not get out is an error (exit 1), also after a Ctrl-C (130); an
-  // error's own exit code stays.
+  // Output on stdout (a report, --help) that did not get out is an error (exit 1), also after a stop signal (130
+  // for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP); an error's own exit code stays.
   const std::string lost = aarad::app::flush_stdout();
   if (!lost.empty()) {
     std::fprintf(stderr, "aarad: error: cannot write to standard output: %s\n", lost.c_str());
-    if (code == 0 || code == 130) return 1;
+    if (code == 0 || code == 128 + SIGINT || code == 128 + SIGTERM || code == 128 + SIGHUP) return 1;
   }
   return code;
 }
