@@ -711,17 +711,20 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
   std::map<std::pair<double, double>, Vec3> segment_ends;  // new points that are a segment's end, on the plane
   const double slack = plane_slack(out.points, 0.0);
   std::vector<std::pair<Vec2, Vec2>> contact_pieces;
-  for (std::size_t i = 0; i < segments.size(); ++i) {
-    if (used[i] == 0) continue;
-    const Segment& s = segments[i];
-    const Vec2 d = s.b - s.a;
-    std::vector<std::pair<double, Vec2>> stops;
-    // The outline points near the segment, each once, in the order the outline lists them.
+  // The outline points near segment i, each once, in the order the outline lists them.
+  const auto outline_points_near = [&](std::size_t i) {
     points_near.clear();
     for (const std::uint32_t k : pieces_near[i])
       for (const int v : {pieces[k].a, pieces[k].b})
         if (std::find(points_near.begin(), points_near.end(), v) == points_near.end()) points_near.push_back(v);
-    for (const auto& [end, end3, t] : {std::tuple{s.a, s.a3, 0.0}, std::tuple{s.b, s.b3, 1.0}}) {
+  };
+  // Where each used segment's ends go: onto an outline point or piece within `weld`, or where they are.
+  std::vector<std::array<Vec2, 2>> end_at(segments.size());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    if (used[i] == 0) continue;
+    const Segment& s = segments[i];
+    outline_points_near(i);
+    for (const auto& [end, end3, k] : {std::tuple{s.a, s.a3, 0}, std::tuple{s.b, s.b3, 1}}) {
       Vec2 moved = end;
       bool placed = false;
       for (const int v : points_near)
@@ -729,9 +732,9 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
           moved = at[static_cast<std::size_t>(v)];
           placed = true;
         }
-      for (const std::uint32_t k : pieces_near[i]) {
+      for (const std::uint32_t near : pieces_near[i]) {
         if (placed) break;
-        Piece& piece = pieces[k];
+        Piece& piece = pieces[near];
         const Vec2 a = at[static_cast<std::size_t>(piece.a)], e = at[static_cast<std::size_t>(piece.b)] - a;
         const double u = glm::dot(end - a, e) / glm::dot(e, e);
         if (!(u > 0.0 && u < 1.0) || glm::length(end - (a + u * e)) > weld) continue;
@@ -740,8 +743,62 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
         placed = true;
       }
       if (!placed) segment_ends.emplace(std::make_pair(end.x, end.y), onto_plane(end3, plane, slack));
-      stops.emplace_back(t, moved);
+      end_at[i][static_cast<std::size_t>(k)] = moved;
     }
+  }
+  // Where two segments meet inside the region. An end of one within `weld` of the other splits the other at that
+  // end; a crossing splits both at one point, computed once, and taken as the segment end, outline point or earlier
+  // crossing within `weld` of it. Left to the triangulation, a crossing was computed there, a rounding away from a
+  // point that is the same where three surfaces meet: two vertices an ulp apart, and a triangle of no area.
+  std::vector<std::vector<std::pair<double, Vec2>>> met(segments.size());
+  {
+    Welder<bool> crossings(weld);
+    for (std::size_t i = 0; i < segments.size(); ++i)
+      if (used[i] != 0)
+        for (const Vec2& x : end_at[i]) crossings(x, true);
+    for (const auto& [ends, n] : edges)
+      for (const int v : {ends.first, ends.second}) crossings(at[static_cast<std::size_t>(v)], true);
+    std::vector<Box> first = segment_boxes(weld, &used), second = first;
+    const auto parameter = [&](std::size_t i, const Vec2& x) {
+      const Vec2 d = segments[i].b - segments[i].a;
+      return glm::dot(x - segments[i].a, d) / glm::dot(d, d);
+    };
+    // An end x of another segment splits segment i when it lies within `weld` of i away from i's ends.
+    const auto splits = [&](std::size_t i, const Vec2& x) {
+      const double t = parameter(i, x);
+      return t > 0.0 && t < 1.0 && distance(segments[i], x) <= weld && glm::length(x - end_at[i][0]) > weld &&
+             glm::length(x - end_at[i][1]) > weld;
+    };
+    for (const auto& [i, j] : meeting(first, second)) {
+      if (i >= j) continue;
+      bool touched = false;
+      for (const auto& [at_end, other] : {std::pair{i, j}, std::pair{j, i}})
+        for (const Vec2& x : end_at[at_end])
+          if (splits(other, x)) {
+            met[other].emplace_back(parameter(other, x), x);
+            touched = true;
+          }
+      if (touched) continue;
+      const Vec2 p = end_at[i][0], d = end_at[i][1] - p, q = end_at[j][0], e = end_at[j][1] - q;
+      const double denominator = cross(d, e);
+      if (denominator == 0.0) continue;
+      const double t = cross(q - p, e) / denominator, u = cross(q - p, d) / denominator;
+      if (!(t > 0.0 && t < 1.0 && u > 0.0 && u < 1.0)) continue;
+      const Vec2 x = crossings(p + t * d, true).first;
+      if (std::min({glm::length(x - p), glm::length(x - end_at[i][1]), glm::length(x - q),
+                    glm::length(x - end_at[j][1])}) <= weld)
+        continue;  // at an end: taken above
+      met[i].emplace_back(parameter(i, x), x);
+      met[j].emplace_back(parameter(j, x), x);
+    }
+  }
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    if (used[i] == 0) continue;
+    const Segment& s = segments[i];
+    const Vec2 d = s.b - s.a;
+    std::vector<std::pair<double, Vec2>> stops{{0.0, end_at[i][0]}, {1.0, end_at[i][1]}};
+    stops.insert(stops.end(), met[i].begin(), met[i].end());
+    outline_points_near(i);
     for (const int v : points_near) {
       const Vec2& x = at[static_cast<std::size_t>(v)];
       const double t = glm::dot(x - s.a, d) / glm::dot(d, d);

@@ -2,6 +2,8 @@
 // balance, neighbours and radiosity inheritance. Expected numbers follow from the scene geometry by hand.
 #include "aarad/core/builtin_scenes.h"
 #include "aarad/core/error.h"
+#include "aarad/core/obj_import.h"
+#include "aarad/core/polygon.h"
 #include "aarad/mesh/contact_lines.h"
 #include "aarad/mesh/hierarchy.h"
 #include "aarad/mesh/initial_meshing.h"
@@ -15,6 +17,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <memory>
 #include <set>
@@ -22,6 +26,7 @@
 #include <array>
 #include <string>
 #include <tuple>
+#include <unistd.h>
 
 namespace aarad::mesh {
 namespace {
@@ -447,6 +452,41 @@ TEST(Hierarchy, RandomContactLinesKeepTheMeshSound) {
       if (h.surface(leaf) == 0) floor_area += h.area(leaf);
     EXPECT_NEAR(floor_area, holed ? 16.0 - 0.16 : 16.0, 1e-9) << "trial " << trial;
   }
+}
+
+// Where three surfaces meet inside one of them, two of its contact lines cross at the point where the third's line
+// ends. The triangulation computed the crossing itself, an ulp from that end: two vertices an ulp apart and a leaf
+// of no area, wound against its plane, which the first shot refused ("runs clockwise"). Three non-planar quads
+// (found by fuzzing the importer), which the import splits into six triangles, each its own surface, cutting
+// through one another.
+TEST(Hierarchy, ContactLinesCrossingWhereAThirdEndsMakeNoLeafOfNoArea) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("aarad-crossing-contacts-" + std::to_string(::getpid()) + ".obj");
+  {
+    std::ofstream obj(file);
+    obj << "v 2.3175316529859593 1.174746712384037 3.8683167910547067\n"
+           "v 2.4511389079806754 2.0440799560441985 4.059127725961696\n"
+           "v 2.063316302725049 2.225253287615963 3.505259645296339\n"
+           "v 2.748861092019325 1.3559200439558015 2.740872274038304\n"
+           "v 2.882468347014041 2.225253287615963 2.931683208945293\n"
+           "v 3.2702909522696673 2.0440799560441985 3.4855512896106498\n"
+           "v 3.136683697274951 1.174746712384037 3.2947403547036607\n"
+           "v 1.929709047730333 1.3559200439558015 3.31444871038935\n"
+           "f 1 2 3 4\nf 8 6 7 5\nf 4 5 8 1\n";
+  }
+  const Scene scene = import_obj(file.string());
+  std::filesystem::remove(file);
+  ASSERT_EQ(scene.surfaces.size(), 6u);
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  std::vector<Vec3> corners;
+  std::size_t wrong = 0;
+  for (const NodeId leaf : h.leaves()) {
+    h.corners(leaf, corners);
+    const Vec3 vector = vector_area(corners);
+    wrong += !(glm::dot(vector, h.plane(leaf).normal) > 0.5 * glm::length(vector) && glm::length(vector) > 1e-9);
+  }
+  EXPECT_EQ(wrong, 0u) << "of " << h.leaf_count() << " leaves";
 }
 
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
