@@ -269,8 +269,11 @@ double overlap(const FlatFace& f, const FlatFace& g) {
 
 }  // namespace
 
-std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
+std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps(std::size_t most_pairs, bool* complete) const {
   std::vector<CoplanarOverlap> found;
+  // Thrown from CGAL's callbacks to end a search that reached most_pairs.
+  struct EnoughPairs {};
+  if (complete != nullptr) *complete = true;
   const double tolerance = kPlaneDistance * diagonal();
   // Coincident planes have nearly equal offsets: pairs are looked for within a window of d. Two unit normals within
   // kNormalDotTolerance differ by at most sqrt(2 kNormalDotTolerance) in length, which moves d by that times the
@@ -347,40 +350,46 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
     return bound + 0x1p-40 * (e.size + std::abs(s.plane.d) + std::abs(t.plane.d)) <= tolerance;
   };
   std::vector<OverlapBox> boxes;
-  for (int k = 0; k < 3; ++k) {
-    const int u = (k + 1) % 3, v = (k + 2) % 3;
-    boxes.clear();
-    for (std::uint32_t si = 0; si < surfaces.size(); ++si) {
-      const Surface& s = surfaces[si];
-      // A surface paired with one whose normal drops k: its own normal, within sqrt(2 kNormalDotTolerance) of that
-      // one, has |n_k| within twice that of its largest component.
-      const Vec3 a = glm::abs(s.plane.normal);
-      if (a[k] < std::max({a.x, a.y, a.z}) - 1e-4) continue;
-      Vec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-      for (const std::uint32_t fi : s.faces)
-        for (const Vec3& p : faces[fi].vertices) {
-          lo = glm::min(lo, Vec2(p[u], p[v]));
-          hi = glm::max(hi, Vec2(p[u], p[v]));
-        }
-      boxes.push_back(overlap_box(lo, hi, s.plane.d, window, si));
+  try {
+    for (int k = 0; k < 3; ++k) {
+      const int u = (k + 1) % 3, v = (k + 2) % 3;
+      boxes.clear();
+      for (std::uint32_t si = 0; si < surfaces.size(); ++si) {
+        const Surface& s = surfaces[si];
+        // A surface paired with one whose normal drops k: its own normal, within sqrt(2 kNormalDotTolerance) of that
+        // one, has |n_k| within twice that of its largest component.
+        const Vec3 a = glm::abs(s.plane.normal);
+        if (a[k] < std::max({a.x, a.y, a.z}) - 1e-4) continue;
+        Vec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+        for (const std::uint32_t fi : s.faces)
+          for (const Vec3& p : faces[fi].vertices) {
+            lo = glm::min(lo, Vec2(p[u], p[v]));
+            hi = glm::max(hi, Vec2(p[u], p[v]));
+          }
+        boxes.push_back(overlap_box(lo, hi, s.plane.d, window, si));
+      }
+      CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const OverlapBox& x, const OverlapBox& y) {
+        std::uint32_t si = x.info(), ti = y.info();
+        if (dropped_axis(surfaces[std::min(si, ti)].plane.normal) != k) return;  // that pair's axes are another k's
+        if (position[ti] < position[si]) std::swap(si, ti);
+        const Surface& s = surfaces[si];
+        const Surface& t = surfaces[ti];
+        if (!(t.plane.d - s.plane.d <= window)) return;
+        if (glm::dot(s.plane.normal, t.plane.normal) < 1.0 - kNormalDotTolerance) return;
+        const auto near = [&](const Vec3& p) { return std::abs(s.plane.signed_distance(p)) <= tolerance; };
+        const Extent& e = extents[ti];
+        const bool in_plane = surely_in_plane(s, t, e) ||
+                              (std::all_of(e.extremes.begin(), e.extremes.end(), near) &&
+                               std::all_of(t.faces.begin(), t.faces.end(), [&](std::uint32_t fi) {
+                                 return std::all_of(faces[fi].vertices.begin(), faces[fi].vertices.end(), near);
+                               }));
+        if (!in_plane) return;
+        candidates.emplace_back(std::min(si, ti), std::max(si, ti));
+        if (candidates.size() - surfaces.size() >= most_pairs) throw EnoughPairs{};
+      });
     }
-    CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const OverlapBox& x, const OverlapBox& y) {
-      std::uint32_t si = x.info(), ti = y.info();
-      if (dropped_axis(surfaces[std::min(si, ti)].plane.normal) != k) return;  // that pair's axes are another k's
-      if (position[ti] < position[si]) std::swap(si, ti);
-      const Surface& s = surfaces[si];
-      const Surface& t = surfaces[ti];
-      if (!(t.plane.d - s.plane.d <= window)) return;
-      if (glm::dot(s.plane.normal, t.plane.normal) < 1.0 - kNormalDotTolerance) return;
-      const auto near = [&](const Vec3& p) { return std::abs(s.plane.signed_distance(p)) <= tolerance; };
-      const Extent& e = extents[ti];
-      const bool in_plane = surely_in_plane(s, t, e) ||
-                            (std::all_of(e.extremes.begin(), e.extremes.end(), near) &&
-                             std::all_of(t.faces.begin(), t.faces.end(), [&](std::uint32_t fi) {
-                               return std::all_of(faces[fi].vertices.begin(), faces[fi].vertices.end(), near);
-                             }));
-      if (in_plane) candidates.emplace_back(std::min(si, ti), std::max(si, ti));
-    });
+  } catch (const EnoughPairs&) {
+    if (complete != nullptr) *complete = false;
   }
   std::sort(candidates.begin(), candidates.end());
   // The faces of the pairs are matched the same way: per set of surfaces joined by pairs and per dropped axis k, a
@@ -461,6 +470,7 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
     const double shared = overlap(f, g);
     if (shared == 0.0) return;  // adds nothing to the sum and is no largest share
     shares.push_back(Share{static_cast<std::uint32_t>(c - candidates.begin()), first, second, shared, f.line, g.line});
+    if (shares.size() >= most_pairs) throw EnoughPairs{};
   };
   // Per set, since surfaces of about one d that are no pair (noise splits a plane into surfaces out of each other's
   // plane) would otherwise be matched for nothing: 20 000 planks turned off the axes and written to 7 digits, 1 873
@@ -479,28 +489,32 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps() const {
   for (std::uint32_t si = 0; si < component.size(); ++si) component[si] = find(si);
   std::sort(by_component.begin(), by_component.end(),
             [&](std::uint32_t x, std::uint32_t y) { return std::pair{component[x], x} < std::pair{component[y], y}; });
-  for (std::size_t i = 0, j = 0; i < by_component.size(); i = j) {
-    for (j = i; j < by_component.size() && component[by_component[j]] == component[by_component[i]]; ++j) {}
-    for (k = 0; k < 3; ++k) {
-      const int u = (k + 1) % 3, v = (k + 2) % 3;
-      boxes.clear();
-      for (std::size_t m = i; m < j; ++m) {
-        const std::uint32_t si = by_component[m];
-        if (!in_axis[si][k]) continue;
-        const Surface& s = surfaces[si];
-        for (const std::uint32_t fi : s.faces) {
-          Vec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-          for (const Vec3& p : faces[fi].vertices) {
-            lo = glm::min(lo, Vec2(p[u], p[v]));
-            hi = glm::max(hi, Vec2(p[u], p[v]));
+  try {
+    for (std::size_t i = 0, j = 0; i < by_component.size(); i = j) {
+      for (j = i; j < by_component.size() && component[by_component[j]] == component[by_component[i]]; ++j) {}
+      for (k = 0; k < 3; ++k) {
+        const int u = (k + 1) % 3, v = (k + 2) % 3;
+        boxes.clear();
+        for (std::size_t m = i; m < j; ++m) {
+          const std::uint32_t si = by_component[m];
+          if (!in_axis[si][k]) continue;
+          const Surface& s = surfaces[si];
+          for (const std::uint32_t fi : s.faces) {
+            Vec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+            for (const Vec3& p : faces[fi].vertices) {
+              lo = glm::min(lo, Vec2(p[u], p[v]));
+              hi = glm::max(hi, Vec2(p[u], p[v]));
+            }
+            boxes.push_back(overlap_box(lo, hi, s.plane.d, window, fi));
           }
-          boxes.push_back(overlap_box(lo, hi, s.plane.d, window, fi));
         }
+        if (boxes.size() >= 2) CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), match);
       }
-      if (boxes.size() >= 2) CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), match);
+      flattened.clear();
+      for (std::size_t m = i; m < j; ++m) flattened_index[by_component[m]].fill(-1);
     }
-    flattened.clear();
-    for (std::size_t m = i; m < j; ++m) flattened_index[by_component[m]].fill(-1);
+  } catch (const EnoughPairs&) {
+    if (complete != nullptr) *complete = false;
   }
   std::sort(shares.begin(), shares.end(), [](const Share& x, const Share& y) {
     return std::tie(x.pair, x.first, x.second) < std::tie(y.pair, y.first, y.second);

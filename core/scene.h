@@ -7,6 +7,7 @@
 #include "aarad/core/rgb.h"
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -142,12 +143,16 @@ class Scene {
   // faces overlap over more than 1e-6 of the smaller surface's area, with that area and the lines of the pair of
   // faces that overlap most. Faces that only share edges do not overlap; the two sides of a panel face
   // opposite ways and are not compared.
+  // The pairs are as many as the faces laid on one another allow: n copies of one face make n (n - 1) / 2. The
+  // search stops after `most_pairs` candidate pairs of surfaces, or as many pairs of faces that share area, and
+  // returns the overlaps found by then; `complete`, when given, says whether it saw them all.
   struct CoplanarOverlap {
     std::uint32_t a = 0, b = 0;
     double area = 0.0;
     int line_a = 0, line_b = 0;
   };
-  std::vector<CoplanarOverlap> coplanar_overlaps() const;
+  std::vector<CoplanarOverlap> coplanar_overlaps(std::size_t most_pairs = std::numeric_limits<std::size_t>::max(),
+                                                 bool* complete = nullptr) const;
 
   // A camera that frames the scene's bounds from outside, used when the scene has none.
   Camera fitted_camera(double aspect) const;
