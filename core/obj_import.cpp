@@ -179,7 +179,8 @@ std::optional<double> parse_number(const std::string& token) {
   char* end = nullptr;
   errno = 0;
   const double value = std::strtod(begin, &end);
-  if (end == begin || *end != '\0') return std::nullopt;
+  // The whole token: a NUL byte inside it ("1\0x", a damaged file) ends the C string before the token does.
+  if (end == begin || end != begin + token.size()) return std::nullopt;
   return value;
 }
 
@@ -687,7 +688,8 @@ Scene import_obj(const std::string& obj_path) {
   // material in a second library on one line, got the default material without a word, since the check above
   // finds the name defined. It gets every library, each on a line of its own, before the first statement, and the
   // file's own `mtllib` lines are left out (the faces are matched to their lines by order, not by tinyobjloader's
-  // line numbers).
+  // line numbers). So are points and lines (`p`, `l`), which aarad does not use: tinyobjloader refused a bad one
+  // ("p 0") with a message naming a line shifted by the libraries above, and no line of the file.
   std::string parsed_text = library_statements;
   parsed_text.reserve(library_statements.size() + cleaned.size());
   {
@@ -695,7 +697,7 @@ Scene import_obj(const std::string& obj_path) {
     std::string line;
     while (std::getline(lines, line)) {
       const std::vector<std::string> t = split_tokens(line);
-      if (t.empty() || t[0] != "mtllib") parsed_text += line;
+      if (t.empty() || (t[0] != "mtllib" && t[0] != "p" && t[0] != "l")) parsed_text += line;
       parsed_text += '\n';
     }
   }

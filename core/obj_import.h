@@ -36,7 +36,7 @@
 // statement whose line ends in a backslash continued on the next line (errors name its first line), and `fo`,
 // an older spelling of `f`, as `f`; a face repeating an earlier one (the same vertices the same way round) is
 // skipped with a warning, and so is a second definition of a material. A statement that OBJ does not have warns
-// once, with its first line.
+// once, with its first line; points and lines (`p`, `l`) and free-form geometry have no area and are passed over.
 #pragma once
 
 #include "aarad/core/scene.h"

@@ -268,6 +268,28 @@ TEST_F(SceneImport, import_infinite_coordinate_is_error_with_line) {
       << accented.message();
 }
 
+// A NUL byte inside a number (a damaged file) ended the C string there: "1\0garbage" was read as 1.
+TEST_F(SceneImport, import_coordinate_with_a_nul_byte_is_error_with_line) {
+  const char text[] = "v 0 0 0\nv 1\0garbage 0 0\nv 1 1 0\nf 1 2 3\n";
+  const InputError e = import_error(write("nul.obj", std::string(text, sizeof text - 1)));
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_NE(e.message().find("is not a number"), std::string::npos) << e.message();
+}
+
+// Points and lines have no area: aarad passes over them, good or bad. A bad one ("p 0") was refused by
+// tinyobjloader with no line of the file and a line number shifted by the material libraries.
+TEST_F(SceneImport, import_passes_over_points_and_lines) {
+  write("s.mtl", kSquareMtl);
+  for (const char* statements : {"p 1 2\nl 1 2 3\n", "p 0\n", "l 1 x\n", "l\np -99\n"}) {
+    const std::string obj = write("points.obj", std::string("mtllib s.mtl\nmtllib s.mtl\n"
+                                                            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n") +
+                                                    statements + "usemtl grey\nf 1 2 3 4\n");
+    const Scene scene = import_obj(obj);
+    EXPECT_EQ(scene.faces.size(), 1u) << statements;
+    EXPECT_EQ(scene.materials[scene.faces[0].material].name, "grey") << statements;
+  }
+}
+
 TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
   const InputError e = import_error(write("range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\n\nf 1 2 7\n"));
   EXPECT_EQ(e.line(), 5);
