@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <numeric>
 
 namespace aarad {
@@ -163,8 +165,82 @@ void project_to_2d(std::span<const Vec3> polygon, const Vec3& n, std::span<Vec2>
   }
 }
 
-void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& triangles) {
-  if (p.size() < 3) return;
+namespace {
+
+// Whether q lies in triangle (a, b, c) or on its boundary, exactly (a, b, c counter-clockwise).
+bool in_triangle(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& q) {
+  return orientation(a, b, q) != Sign::kNegative && orientation(b, c, q) != Sign::kNegative &&
+         orientation(c, a, q) != Sign::kNegative;
+}
+
+// Ear clipping of a large polygon: the vertices in a doubly linked ring, the walk going on from the last ear
+// instead of starting again at the first vertex, and an ear's emptiness tested against the reflex vertices (only
+// those can lie in an ear of a simple polygon; a vertex stays reflex until a neighbour is clipped) of the grid
+// cells its box meets (about n cells over the polygon's box), not against all of them. A polygon with no ear left
+// (not simple: a non-planar face seen along its normal may cross itself) has its next vertex clipped, as
+// ear_clip_small does.
+void ear_clip_large(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& triangles) {
+  const std::size_t n = p.size();
+  Vec2 low = p[0], high = p[0];
+  for (const Vec2& v : p) {
+    low = glm::min(low, v);
+    high = glm::max(high, v);
+  }
+  const auto side = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));
+  const Vec2 extent = glm::max(high - low, Vec2(std::numeric_limits<double>::min()));
+  const auto cell_of = [&](double x, double lo, double size) {
+    const double at = std::floor((x - lo) / size * static_cast<double>(side));
+    return static_cast<std::size_t>(std::clamp(at, 0.0, static_cast<double>(side - 1)));
+  };
+  std::vector<std::vector<std::size_t>> cells(side * side);
+  for (std::size_t i = 0; i < n; ++i)
+    cells[cell_of(p[i].y, low.y, extent.y) * side + cell_of(p[i].x, low.x, extent.x)].push_back(i);
+  std::vector<std::size_t> next(n), prev(n);
+  std::vector<std::uint8_t> removed(n, 0), reflex(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    next[i] = (i + 1) % n;
+    prev[i] = (i + n - 1) % n;
+  }
+  const auto update_reflex = [&](std::size_t i) {
+    reflex[i] = orientation(p[prev[i]], p[i], p[next[i]]) != Sign::kPositive;
+  };
+  for (std::size_t i = 0; i < n; ++i) update_reflex(i);
+  const auto is_ear = [&](std::size_t a, std::size_t b, std::size_t c) {
+    if (orientation(p[a], p[b], p[c]) != Sign::kPositive) return false;
+    const Vec2 lo = glm::min(p[a], glm::min(p[b], p[c])), hi = glm::max(p[a], glm::max(p[b], p[c]));
+    for (std::size_t y = cell_of(lo.y, low.y, extent.y); y <= cell_of(hi.y, low.y, extent.y); ++y)
+      for (std::size_t x = cell_of(lo.x, low.x, extent.x); x <= cell_of(hi.x, low.x, extent.x); ++x)
+        for (const std::size_t q : cells[y * side + x]) {
+          if (reflex[q] == 0 || removed[q] != 0 || q == a || q == b || q == c || p[q] == p[a] || p[q] == p[b] ||
+              p[q] == p[c])
+            continue;
+          if (in_triangle(p[a], p[b], p[c], p[q])) return false;
+        }
+    return true;
+  };
+  std::size_t remaining = n, at = 0, tried = 0;
+  while (remaining > 3) {
+    const std::size_t a = prev[at], c = next[at];
+    if (tried < remaining && !is_ear(a, at, c)) {
+      at = c;
+      ++tried;
+      continue;
+    }
+    triangles.push_back({a, at, c});
+    removed[at] = 1;
+    next[a] = c;
+    prev[c] = a;
+    update_reflex(a);
+    update_reflex(c);
+    --remaining;
+    at = a;  // the ear's neighbours are the vertices whose ears changed
+    tried = 0;
+  }
+  triangles.push_back({prev[at], at, next[at]});
+}
+
+// The plain algorithm for small polygons: every ear found by scanning the remaining vertices from the first.
+void ear_clip_small(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& triangles) {
   std::vector<std::size_t> remaining(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) remaining[i] = i;
   while (remaining.size() > 3) {
@@ -190,6 +266,20 @@ void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& 
     remaining.erase(remaining.begin() + static_cast<std::ptrdiff_t>(k));
   }
   triangles.push_back({remaining[0], remaining[1], remaining[2]});
+}
+
+}  // namespace
+
+// Polygons up to kSmallPolygon vertices (every face of the usual scene) are clipped as they always were, so their
+// triangles do not change; larger ones took quadratic time or worse (a non-planar face of 100 000 vertices, 82 s).
+void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& triangles) {
+  constexpr std::size_t kSmallPolygon = 64;
+  if (p.size() < 3) return;
+  if (p.size() <= kSmallPolygon) {
+    ear_clip_small(p, triangles);
+  } else {
+    ear_clip_large(p, triangles);
+  }
 }
 
 void convex_intersection(std::span<const Vec2> a, std::span<const Vec2> b, std::vector<Vec2>& out,
