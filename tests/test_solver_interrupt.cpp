@@ -131,12 +131,12 @@ TEST(SolverInterrupt, SigtermAndSighupStopTheSolveAsCtrlCDoes) {
   expect_interrupted_by(SIGHUP, "SIGHUP");
 }
 
-// Under `nohup` (SIGHUP ignored), a SIGHUP changes nothing.
-TEST(SolverInterrupt, AnIgnoredSighupStaysIgnored) {
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "nohup";
+// A solve started with `signal` ignored, and sent it three times: it runs its 300 shots and exits 0.
+void expect_ignored(int signal) {
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("ignored-" + std::to_string(signal));
   fs::remove_all(out);
   const auto [child, child_stderr] =
-      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, SIGHUP);
+      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, signal);
   ASSERT_GT(child, 0);
   ASSERT_NE(child_stderr, nullptr);
   std::string everything;
@@ -145,36 +145,7 @@ TEST(SolverInterrupt, AnIgnoredSighupStaysIgnored) {
   while (std::fgets(line, sizeof line, child_stderr) != nullptr) {
     everything += line;
     if (std::string(line).rfind("aarad: shot ", 0) == 0 && signals < 3) {
-      ASSERT_EQ(kill(child, SIGHUP), 0);
-      ++signals;
-    }
-  }
-  std::fclose(child_stderr);
-  int status = 0;
-  ASSERT_EQ(waitpid(child, &status, 0), child);
-  ASSERT_GT(signals, 0) << "no progress line seen; stderr:\n" << everything;
-  ASSERT_TRUE(WIFEXITED(status)) << everything;
-  EXPECT_EQ(WEXITSTATUS(status), 0) << everything;
-  std::ifstream in(out / "report.json");
-  EXPECT_EQ(nlohmann::json::parse(in)["shots"].get<long long>(), 300);
-}
-
-// A SIGINT the parent set to be ignored stays ignored: a shell starts a background job (`aarad solve ... &`) so, and
-// a Ctrl-C meant for the script that started it stopped the solve (exit 130, "interrupted": true).
-TEST(SolverInterrupt, AnIgnoredSigintStaysIgnored) {
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / "ignored";
-  fs::remove_all(out);
-  const auto [child, child_stderr] =
-      start_solve({"cornell", "--max-shots", "300", "--width", "16", "--height", "16", "--out", out.string()}, SIGINT);
-  ASSERT_GT(child, 0);
-  ASSERT_NE(child_stderr, nullptr);
-  std::string everything;
-  char line[4096];
-  int signals = 0;
-  while (std::fgets(line, sizeof line, child_stderr) != nullptr) {
-    everything += line;
-    if (std::string(line).rfind("aarad: shot ", 0) == 0 && signals < 3) {
-      ASSERT_EQ(kill(child, SIGINT), 0);
+      ASSERT_EQ(kill(child, signal), 0);
       ++signals;
     }
   }
@@ -189,6 +160,13 @@ TEST(SolverInterrupt, AnIgnoredSigintStaysIgnored) {
   EXPECT_EQ(report["interrupted"], false);
   EXPECT_EQ(report["shots"].get<long long>(), 300);
 }
+
+// A SIGINT the parent set to be ignored stays ignored: a shell starts a background job (`aarad solve ... &`) so, and
+// a Ctrl-C meant for the script that started it stopped the solve (exit 130, "interrupted": true).
+TEST(SolverInterrupt, AnIgnoredSigintStaysIgnored) { expect_ignored(SIGINT); }
+
+// Under `nohup` (SIGHUP ignored), a SIGHUP changes nothing.
+TEST(SolverInterrupt, AnIgnoredSighupStaysIgnored) { expect_ignored(SIGHUP); }
 
 // `aarad solve cornell` writing 2048 x 2048 images (about 1.2 s of writing, so that a Ctrl-C sent when mesh.ply
 // appears arrives while the images are written, even on a busy machine) into `out`, as a child process
@@ -296,26 +274,34 @@ TEST(SolverInterrupt, SigintWhileWritingLetsEveryFileBeWrittenAndExits130) {
   fs::remove_all(out);
 }
 
-// A second Ctrl-C while the files are written stops after the file being written: no temporary file stays behind
-// (before, the second Ctrl-C killed the program in the middle of a file and left `.flat.tmpPID-K.png`), what was
-// written is whole, report.json (written last) is not, and the exit code is 130.
-TEST(SolverInterrupt, ASecondSigintWhileWritingStopsAfterTheFileBeingWrittenAndLeavesNoTemporary) {
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("stopped-" + std::to_string(getpid()));
+// `first` while the files are written, then `second` once the first was handled (two pending signals of one kind
+// would be one): the writing stops after the file being written, no temporary file stays behind, what was written
+// is whole, report.json (written last) is not, and the exit code is 128 + the first signal's number. The messages
+// name the signals (`first_label`, `second_label`).
+void expect_stopped_while_writing(int first, const std::string& first_label, int second,
+                                  const std::string& second_label) {
+  const std::string name = "stopped-" + std::to_string(first) + "-" + std::to_string(getpid());
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / name;
   WritingChild child(out);
   ASSERT_GT(child.pid, 0);
   ASSERT_NE(child.err, nullptr);
   ASSERT_TRUE(child.wait_for(out / "mesh.ply")) << "mesh.ply never appeared";
-  ASSERT_EQ(kill(child.pid, SIGINT), 0);
-  // The second once the first has been handled (two pending SIGINTs would be one).
-  if (child.read_until("aarad: Ctrl-C:")) {
-    ASSERT_EQ(kill(child.pid, SIGINT), 0);
+  ASSERT_EQ(kill(child.pid, first), 0);
+  if (child.read_until("aarad: " + first_label + ":")) {
+    ASSERT_EQ(kill(child.pid, second), 0);
   }
   const int status = child.finish();
   ASSERT_TRUE(WIFEXITED(status)) << child.everything;
-  EXPECT_EQ(WEXITSTATUS(status), 130) << child.everything;
-  EXPECT_NE(child.everything.find("aarad: Ctrl-C: stopping after the file being written"), std::string::npos)
+  EXPECT_EQ(WEXITSTATUS(status), 128 + first) << child.everything;
+  EXPECT_NE(child.everything.find("aarad: " + first_label + ": writing the files to the end; " + first_label +
+                                  " again to stop after the file being written"),
+            std::string::npos)
       << child.everything;
-  EXPECT_NE(child.everything.find("aarad: stopped by Ctrl-C; wrote mesh.ply"), std::string::npos) << child.everything;
+  EXPECT_NE(child.everything.find("aarad: " + second_label + ": stopping after the file being written"),
+            std::string::npos)
+      << child.everything;
+  EXPECT_NE(child.everything.find("aarad: stopped by " + second_label + "; wrote mesh.ply"), std::string::npos)
+      << child.everything;
   const std::set<std::string> names = names_in(out);
   for (const std::string& name : names) EXPECT_NE(name[0], '.') << "a temporary file: " << name;
   EXPECT_EQ(names.count("report.json"), 0u);
@@ -326,31 +312,16 @@ TEST(SolverInterrupt, ASecondSigintWhileWritingStopsAfterTheFileBeingWrittenAndL
   fs::remove_all(out);
 }
 
-// SIGTERM while the files are written, then Ctrl-C: the first lets the writing go on, the second stops it after the
-// file being written, with no temporary left; the exit code is the first signal's, 143.
+// A second Ctrl-C while the files are written stops after the file being written (before, it killed the program in
+// the middle of a file and left `.flat.tmpPID-K.png`); the exit code is 130.
+TEST(SolverInterrupt, ASecondSigintWhileWritingStopsAfterTheFileBeingWrittenAndLeavesNoTemporary) {
+  expect_stopped_while_writing(SIGINT, "Ctrl-C", SIGINT, "Ctrl-C");
+}
+
+// SIGTERM while the files are written, then Ctrl-C: the first lets the writing go on, the second stops it; the exit
+// code is the first signal's, 143.
 TEST(SolverInterrupt, SigtermWhileWritingThenCtrlCStopsAfterTheFileBeingWritten) {
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / ("sigterm-" + std::to_string(getpid()));
-  WritingChild child(out);
-  ASSERT_GT(child.pid, 0);
-  ASSERT_NE(child.err, nullptr);
-  ASSERT_TRUE(child.wait_for(out / "mesh.ply")) << "mesh.ply never appeared";
-  ASSERT_EQ(kill(child.pid, SIGTERM), 0);
-  if (child.read_until("aarad: SIGTERM:")) {
-    ASSERT_EQ(kill(child.pid, SIGINT), 0);
-  }
-  const int status = child.finish();
-  ASSERT_TRUE(WIFEXITED(status)) << child.everything;
-  EXPECT_EQ(WEXITSTATUS(status), 143) << child.everything;
-  EXPECT_NE(child.everything.find("aarad: SIGTERM: writing the files to the end; SIGTERM again"), std::string::npos)
-      << child.everything;
-  EXPECT_NE(child.everything.find("aarad: stopped by Ctrl-C; wrote mesh.ply"), std::string::npos) << child.everything;
-  const std::set<std::string> names = names_in(out);
-  for (const std::string& name : names) EXPECT_NE(name[0], '.') << "a temporary file: " << name;
-  EXPECT_EQ(names.count("report.json"), 0u);
-  for (const char* image : {"flat.png", "smooth.png", "mesh.png", "radiosity.exr"}) {
-    if (names.count(image) != 0) expect_whole_image(out / image, 2048);
-  }
-  fs::remove_all(out);
+  expect_stopped_while_writing(SIGTERM, "SIGTERM", SIGINT, "Ctrl-C");
 }
 
 }  // namespace
