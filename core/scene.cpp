@@ -46,6 +46,9 @@ std::uint32_t Scene::add_material(const Material& material) {
 
 void Scene::add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line,
                      std::uint32_t smoothing) {
+  if (group >= groups.size())
+    throw Error("Scene::add_face: group " + std::to_string(group) + " does not exist (the scene has " +
+                std::to_string(groups.size()) + " groups); make it with add_group first");
   Face face;
   face.vertices = std::move(vertices);
   face.group = group;

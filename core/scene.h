@@ -96,7 +96,8 @@ class Scene {
 
   // add_group returns the index of the group named `group_name`, creating it on first use; add_face adds
   // a face to group index `group` with material index `material` and smoothing group `smoothing` (0: none).
-  // The face's surface is assigned by build_surfaces().
+  // The face's surface is assigned by build_surfaces(). A group that does not exist throws aarad::Error; a
+  // material that does not exist is reported by validate().
   std::uint32_t add_group(const std::string& group_name);
   std::uint32_t add_material(const Material& material);
   void add_face(std::uint32_t group, std::uint32_t material, std::vector<Vec3> vertices, int source_line = 0,

@@ -99,6 +99,16 @@ double HemicubeGeometry::total() const {
   return sum;
 }
 
+void add_unoccluded_lists(std::span<const UnoccludedList> lists, std::span<double> out) {
+  for (const UnoccludedList& list : lists)
+    for (const auto& [receiver, factor] : list)
+      if (receiver >= out.size())
+        throw Error("add_unoccluded: " + std::to_string(out.size()) + " output values, but the last shot reached "
+                    "receiver " + std::to_string(receiver) + "; pass one value per receiver");
+  for (const UnoccludedList& list : lists)
+    for (const auto& [receiver, factor] : list) out[receiver] += factor;
+}
+
 void run_face_tasks(const std::array<std::size_t, kFaceTasks>& loads, const std::function<void(int)>& run) {
   std::array<int, kFaceTasks> order{};
   for (int k = 0; k < kFaceTasks; ++k) order[static_cast<std::size_t>(k)] = k;

@@ -563,10 +563,8 @@ class PreparedReceivers {
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
 // add_unoccluded). Added up in task order, so the sums do not depend on the number of threads.
 using UnoccludedList = std::vector<std::pair<std::uint32_t, double>>;
-inline void add_unoccluded_lists(std::span<const UnoccludedList> lists, std::span<double> out) {
-  for (const UnoccludedList& list : lists)
-    for (const auto& [receiver, factor] : list) out[receiver] += factor;
-}
+// Throws aarad::Error, adding nothing, when out is shorter than a receiver index in the lists.
+void add_unoccluded_lists(std::span<const UnoccludedList> lists, std::span<double> out);
 
 // Runs run(k) for k = 0 .. kFaceTasks - 1 on the threads of the current TBB arena, the tasks of most receivers
 // (loads[k]: the receivers on task k's list) first: each thread takes the next task when it is free, so the small

@@ -91,7 +91,23 @@ void ReceiverView::check_receiver(std::span<const Vec3> polygon, const Plane& pl
   if (!std::all_of(polygon.begin(), polygon.end(), finite) || !finite(plane.normal) || !std::isfinite(plane.d))
     throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
                 " has a corner or plane that is not finite (nan or inf); give finite corners and plane");
-  const Vec3 vector = vector_area(polygon);
+  Vec3 vector = vector_area(polygon);
+  if (!finite(vector)) {
+    // Overflowed (a polygon 1e200 across: nan, which passed the test below): its vector area's direction from the
+    // polygon moved to its first corner and scaled by a power of two near its extent.
+    double extent = 0.0;
+    for (const Vec3& p : polygon) {
+      const Vec3 d = glm::abs(p - polygon.front());
+      extent = std::max({extent, d.x, d.y, d.z});
+    }
+    if (!std::isfinite(extent))
+      throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
+                  " is too large for double precision (its corners' differences overflow); scale the scene down");
+    const double scale = std::ldexp(1.0, -std::ilogb(extent));
+    vector = Vec3(0.0);
+    for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
+      vector += glm::cross((polygon[k] - polygon.front()) * scale, (polygon[k + 1] - polygon.front()) * scale);
+  }
   if (glm::dot(vector, plane.normal) < -0.5 * glm::length(vector))
     throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
                 " runs clockwise seen from the side its plane's normal points to; reverse its corners or its plane");

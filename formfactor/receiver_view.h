@@ -16,7 +16,10 @@ namespace aarad::formfactor {
 // a vertex may lie on the segment between its neighbours (the solver's receivers carry the hanging vertices of their
 // leaves' edges, refine/receiver_cache.h).
 // surface[i] is its physical-surface id (pieces of one surface never occlude each other);
-// patch[i] is its parent patch id (back-face culling is decided per patch, as the paper does).
+// patch[i] is its parent patch id (back-face culling is decided per patch, as the paper does): receivers that share
+// a patch id must lie in one plane, facing one way, as the pieces of one patch do, since a back end decides them all
+// on the plane of the patch's first receiver (a receiver facing the shooter under a patch id whose first receiver
+// faces away gets 0, unchecked). Polygons that are not pieces of one patch each take a patch id of their own.
 //
 // Shared points. Every corner also names a point of points(): corners of neighbouring receivers that are the
 // same vertex name the same point, so a back end can transform each point once per shot instead of once per

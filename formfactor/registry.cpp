@@ -5,19 +5,26 @@
 #include "aarad/formfactor/backend.h"
 #include "aarad/formfactor/hemicube.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace aarad::formfactor {
 
 Shooter Shooter::from_normal(const Vec3& centre, const Vec3& normal) {
-  const double length = glm::length(normal);
-  if (!(length > 0.0) || !std::isfinite(length))
-    throw Error("Shooter::from_normal: the normal (" + std::to_string(normal.x) + ", " + std::to_string(normal.y) +
-                ", " + std::to_string(normal.z) + ") has no direction");
+  // Scaled by a power of two near its largest component first, so that a normal of 1e200 or 1e-200 (whose length
+  // overflows or underflows) keeps its direction.
+  const double largest = std::max({std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)});
+  if (!(largest > 0.0) || !std::isfinite(largest)) {
+    char text[160];
+    std::snprintf(text, sizeof text, "(%.17g, %.17g, %.17g)", normal.x, normal.y, normal.z);
+    throw Error(std::string("Shooter::from_normal: the normal ") + text + " has no direction; give a finite, "
+                "non-zero normal");
+  }
   Shooter s;
   s.centre = centre;
-  s.normal = glm::normalize(normal);
+  s.normal = glm::normalize(normal * std::ldexp(1.0, -std::ilogb(largest)));
   const Vec3 n = s.normal;
   // The world axis least aligned with the normal (ties go to x, then y), made orthogonal to it.
   const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);

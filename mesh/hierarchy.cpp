@@ -405,6 +405,7 @@ std::span<const Rgb> Hierarchy::radiosities() const { return impl_->radiosity; }
 std::span<const Rgb> Hierarchy::unshots() const { return impl_->unshot; }
 
 void Hierarchy::add_radiosity(NodeId leaf, const Rgb& delta) {
+  require_leaf(leaf, "add_radiosity");
   Impl& m = *impl_;
   m.radiosity[leaf] += delta;
   for (NodeId a = m.parent[leaf]; a != kNoNode; a = m.parent[a]) m.radiosity[a] += delta * (m.area[leaf] / m.area[a]);

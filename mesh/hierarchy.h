@@ -53,13 +53,16 @@ class Hierarchy {
   // keeps alive, as refine::Solver does. Throws as above, and aarad::Error for a null pointer.
   Hierarchy(std::shared_ptr<const Scene> scene, const MeshingOptions& options);
   ~Hierarchy();
+  // A hierarchy moved from holds nothing: it may only be assigned to or destroyed.
   Hierarchy(Hierarchy&&) noexcept;
   Hierarchy& operator=(Hierarchy&&) noexcept;
 
   const Scene& scene() const;
   const MeshingOptions& options() const;  // with defaults resolved
 
-  // Nodes. Patches are the top nodes of each surface (level 0); elements are their descendants.
+  // Nodes. Patches are the top nodes of each surface (level 0); elements are their descendants. The accessors below
+  // take a node below node_count() and do not check it (they run in the solver's inner loops); split(),
+  // edge_neighbours() and leaf_polygon() check theirs and throw.
   std::size_t node_count() const;
   std::span<const NodeId> patches() const;
   NodeId parent(NodeId node) const;              // kNoNode for patches
@@ -104,6 +107,7 @@ class Hierarchy {
   std::span<const Rgb> unshots() const;
   // Adds `delta` to the radiosity of `leaf` and delta x area(leaf) / area(a) to every ancestor a, so each
   // inner node keeps the area-weighted mean of its leaves (an invariant check_invariants verifies). O(level).
+  // Throws aarad::Error for a node that is not a leaf.
   void add_radiosity(NodeId leaf, const Rgb& delta);
   // Recomputes the radiosity of every inner node as the area-weighted mean of its children, bottom up. O(n).
   void update_inner_radiosity();

@@ -37,6 +37,23 @@ TEST(FormfactorAnalytic, CentredSquare) {
   EXPECT_NEAR(analytic(kUp, rectangle({-0.5, -0.5, 1}, {0, 1, 0}, {1, 0, 0})), 0.2394565, 5e-8);
 }
 
+// The factor depends only on directions: a centred square of half-width H at height H gets (4 / pi) atan(1 / sqrt 2)
+// / sqrt 2 at every scale. Lengths overflowed from 1e77 (giving 0) and at 1e200 (nan); products underflowed at 1e-200
+// (giving 0). Through a view with the plane given by hand (plane_of's own offset overflows far sooner), the check of
+// the polygon's winding took the nan of its overflowed vector area for a pass.
+TEST(FormfactorAnalytic, EveryScaleGivesTheSameFactor) {
+  const double exact = 4.0 / kPi / std::sqrt(2.0) * std::atan(1.0 / std::sqrt(2.0));
+  for (const double h : {1e-300, 1e-200, 1e-100, 1e-5, 1.0, 1e5, 1e77, 1e150, 1e200, 1e300}) {
+    const Polygon square = rectangle({-h, -h, h}, {0, 2 * h, 0}, {2 * h, 0, 0});
+    EXPECT_NEAR(polygon_form_factor(Vec3(0.0), Vec3(0, 0, 1), square), exact, 1e-15) << h;
+    ReceiverView view;
+    view.add(square, Plane{{0, 0, -1}, h}, 0, 0);
+    std::vector<double> out(1, -1.0);
+    AnalyticBackend().compute(kUp, view, {}, out);
+    EXPECT_NEAR(out[0], exact, 1e-15) << h;
+  }
+}
+
 TEST(FormfactorAnalytic, OffAxisDisk) {
   EXPECT_NEAR(howell_disk(1, 1, 0.5), 0.4379826, 5e-8);
   // An inscribed 4096-gon falls short of the disk by about (2 pi / m)^2 / 6 of its area.
@@ -134,6 +151,40 @@ TEST(FormfactorBackends, ShotsWithABadFrameOrOutputSizeAreRefused) {
   }
   EXPECT_THROW(Shooter::from_normal(Vec3(0), Vec3(0)), Error);
   EXPECT_THROW(Shooter::from_normal(Vec3(0), Vec3(std::nan(""), 0, 1)), Error);
+  // A normal whose length overflows or underflows still has a direction.
+  const double half = std::sqrt(0.5);
+  EXPECT_NEAR(glm::distance(Shooter::from_normal(Vec3(0), Vec3(1e200, 1e200, 0)).normal, Vec3(half, half, 0)), 0.0,
+              1e-15);
+  EXPECT_NEAR(glm::distance(Shooter::from_normal(Vec3(0), Vec3(1e-200, 0, 1e-200)).normal, Vec3(half, 0, half)), 0.0,
+              1e-15);
+  try {
+    Shooter::from_normal(Vec3(0), Vec3(0.0, 0.0, -0.0));
+    ADD_FAILURE() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "Shooter::from_normal: the normal (0, 0, -0) has no direction; give a finite, non-zero "
+                           "normal");
+  }
+}
+
+// add_unoccluded writes one value per receiver: a span too short for the receivers the last shot reached is refused
+// (it wrote past its end).
+TEST(FormfactorBackends, AddUnoccludedIntoTooShortASpanIsRefused) {
+  ReceiverView view;
+  add(view, rectangle({-0.5, -0.5, 1}, {0, 1, 0}, {1, 0, 0}), 0, 0);
+  add(view, rectangle({0.6, -0.5, 1}, {0, 1, 0}, {1, 0, 0}), 1, 1);
+  const std::vector<std::uint8_t> wanted(view.size(), 1);
+  for (const std::string& name : {"aa-hemicube", "hemicube"}) {
+    auto backend = make_backend(name, {.resolution = 64});
+    ASSERT_TRUE(backend->keep_unoccluded(wanted)) << name;
+    std::vector<double> out(view.size(), 0.0);
+    backend->compute(kUp, view, {}, out);
+    std::vector<double> unoccluded(view.size(), 0.0);
+    EXPECT_TRUE(backend->add_unoccluded(unoccluded)) << name;
+    EXPECT_GT(unoccluded[1], 0.0) << name;
+    double short_out[1] = {0.0};
+    EXPECT_THROW(backend->add_unoccluded(std::span<double>(short_out, 1)), Error) << name;
+    EXPECT_EQ(short_out[0], 0.0) << name;
+  }
 }
 
 // A receiver with a corner or plane that is not finite is refused when it is added: a square 1e150 across has a

@@ -929,6 +929,10 @@ TEST(HierarchySplit, AddRadiosityKeepsAncestorsAreaWeighted) {
   h.update_inner_radiosity();
   EXPECT_DOUBLE_EQ(h.radiosity(e).r, 1.25);
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  // An inner node is refused (its own B would move, not its leaves'): the mean it keeps would be broken.
+  EXPECT_THROW(h.add_radiosity(e, Rgb(1.0)), Error);
+  EXPECT_THROW(h.add_radiosity(static_cast<NodeId>(h.node_count()), Rgb(1.0)), Error);
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
 }
 
 TEST(Hierarchy, LeavesUnderAndMemory) {

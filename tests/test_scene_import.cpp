@@ -854,6 +854,20 @@ TEST_F(SceneImport, import_faces_on_one_another_in_one_plane_warn_with_their_lin
   EXPECT_EQ(overlaps, 1);  // the tile only shares an edge with the floor
 }
 
+// A face added to a group that does not exist is refused (it wrote past the groups' end).
+TEST(SceneSurfaces, AFaceOfAGroupThatDoesNotExistIsRefused) {
+  Scene scene;
+  scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+  try {
+    scene.add_face(7, 0, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}});
+    ADD_FAILURE() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "Scene::add_face: group 7 does not exist (the scene has 0 groups); make it with add_group "
+                           "first");
+  }
+  EXPECT_TRUE(scene.faces.empty());
+}
+
 // n copies of one face overlap in n (n - 1) / 2 pairs. The search stops at the limit it is given and says so: 200
 // copies, each its own group (19 900 pairs of surfaces), and one surface of 200 copies side by side (19 900 pairs
 // of its faces).
