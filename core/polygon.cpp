@@ -187,10 +187,11 @@ void ear_clip_large(std::span<const Vec2> p, std::vector<std::array<std::size_t,
     high = glm::max(high, v);
   }
   const auto side = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));
-  const Vec2 extent = glm::max(high - low, Vec2(std::numeric_limits<double>::min()));
+  // Halves, so that a polygon spanning more than the largest double (corners near +-1e308) has a finite extent.
+  const Vec2 extent = glm::max(0.5 * high - 0.5 * low, Vec2(std::numeric_limits<double>::min()));
   const auto cell_of = [&](double x, double lo, double size) {
-    const double at = std::floor((x - lo) / size * static_cast<double>(side));
-    return static_cast<std::size_t>(std::clamp(at, 0.0, static_cast<double>(side - 1)));
+    const double at = std::floor((0.5 * x - 0.5 * lo) / size * static_cast<double>(side));
+    return at >= 0.0 ? static_cast<std::size_t>(std::min(at, static_cast<double>(side - 1))) : std::size_t{0};
   };
   std::vector<std::vector<std::size_t>> cells(side * side);
   for (std::size_t i = 0; i < n; ++i)
@@ -275,7 +276,8 @@ void ear_clip_small(std::span<const Vec2> p, std::vector<std::array<std::size_t,
 void ear_clip(std::span<const Vec2> p, std::vector<std::array<std::size_t, 3>>& triangles) {
   constexpr std::size_t kSmallPolygon = 64;
   if (p.size() < 3) return;
-  if (p.size() <= kSmallPolygon) {
+  const auto finite = [](const Vec2& v) { return std::isfinite(v.x) && std::isfinite(v.y); };
+  if (p.size() <= kSmallPolygon || !std::all_of(p.begin(), p.end(), finite)) {  // no grid of what is not finite
     ear_clip_small(p, triangles);
   } else {
     ear_clip_large(p, triangles);

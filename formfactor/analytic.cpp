@@ -18,20 +18,22 @@ double polygon_form_factor(const Vec3& point, const Vec3& normal, std::span<cons
   // brings the largest offset near 1, which changes no bit of the result in the usual range, and keeps the lengths
   // and products below from overflowing (a receiver 1e77 across gave 0, one 1e200 across nan) or underflowing
   // (one 1e-200 across gave 0).
-  double largest = 0.0;
+  double farthest = 0.0;  // the largest offset's largest component
   for (const Vec3& p : polygon) {
     const Vec3 r = glm::abs(p - point);
-    largest = std::max({largest, r.x, r.y, r.z});
+    farthest = std::max({farthest, r.x, r.y, r.z});
   }
-  if (!(largest > 0.0) || !std::isfinite(largest)) return 0.0;
-  const double scale = std::ldexp(1.0, -std::ilogb(largest));
+  if (!(farthest > 0.0) || !std::isfinite(farthest)) return 0.0;
+  // scalbn per component, not a product with 2^e: for a subnormal offset 2^e itself overflows.
+  const int e = -std::ilogb(farthest);
+  const auto scaled = [e](const Vec3& v) { return Vec3(std::scalbn(v.x, e), std::scalbn(v.y, e), std::scalbn(v.z, e)); };
   double sum = 0.0;
-  Vec3 r0 = (polygon[m - 1] - point) * scale;
+  Vec3 r0 = scaled(polygon[m - 1] - point);
   for (std::size_t i = 0; i < m; ++i) {
-    const Vec3 r1 = (polygon[i] - point) * scale;
+    const Vec3 r1 = scaled(polygon[i] - point);
     // R_{i+1} x R_i, as (v_{i+1} - v_i) x R_i: the same vector, without the cancellation of two nearly parallel
     // long vectors (a receiver small against its distance: at 1e-8 of it the direct product was noise).
-    const Vec3 c = glm::cross((polygon[i] - polygon[i == 0 ? m - 1 : i - 1]) * scale, r0);
+    const Vec3 c = glm::cross(scaled(polygon[i] - polygon[i == 0 ? m - 1 : i - 1]), r0);
     double len = glm::length(c);
     if (len < 1e-140) {
       // |c|^2 underflows below about 1e-154: the length of c scaled by its largest component instead (an edge 1e-200

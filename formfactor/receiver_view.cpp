@@ -103,7 +103,7 @@ void ReceiverView::check_receiver(std::span<const Vec3> polygon, const Plane& pl
     if (!std::isfinite(extent))
       throw Error("ReceiverView::add: receiver " + std::to_string(size()) +
                   " is too large for double precision (its corners' differences overflow); scale the scene down");
-    const double scale = std::ldexp(1.0, -std::ilogb(extent));
+    const double scale = std::ldexp(1.0, -std::ilogb(extent));  // extent overflowed: far from subnormal
     vector = Vec3(0.0);
     for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
       vector += glm::cross((polygon[k] - polygon.front()) * scale, (polygon[k + 1] - polygon.front()) * scale);

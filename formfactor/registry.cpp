@@ -24,7 +24,8 @@ Shooter Shooter::from_normal(const Vec3& centre, const Vec3& normal) {
   }
   Shooter s;
   s.centre = centre;
-  s.normal = glm::normalize(normal * std::ldexp(1.0, -std::ilogb(largest)));
+  const int e = -std::ilogb(largest);  // scalbn per component: 2^e overflows for a subnormal normal
+  s.normal = glm::normalize(Vec3(std::scalbn(normal.x, e), std::scalbn(normal.y, e), std::scalbn(normal.z, e)));
   const Vec3 n = s.normal;
   // The world axis least aligned with the normal (ties go to x, then y), made orthogonal to it.
   const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);

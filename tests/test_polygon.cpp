@@ -444,6 +444,21 @@ TEST(Polygon, polygon_ear_clip_of_large_concave_polygons) {
     }
     polygons.push_back(spiral);
   }
+  {
+    // A circle of radius 1e308: its span overflows a double, and the grid's cell index was a nan cast to an integer
+    // (a crash): it gets the triangles of the unit circle.
+    std::vector<Vec2> huge, same;
+    for (int i = 0; i < 65; ++i) {
+      const double angle = 2.0 * std::acos(-1.0) * i / 65.0;
+      huge.emplace_back(1e308 * std::cos(angle), 1e308 * std::sin(angle));
+      same.emplace_back(std::cos(angle), std::sin(angle));
+    }
+    std::vector<std::array<std::size_t, 3>> of_huge, of_same;
+    ear_clip(huge, of_huge);
+    ear_clip(same, of_same);
+    EXPECT_EQ(of_huge.size(), 63u);
+    EXPECT_EQ(of_huge, of_same);
+  }
   for (const auto& p : polygons) {
     ASSERT_TRUE(is_simple(p));
     ASSERT_GT(signed_area(p), 0.0);

@@ -280,8 +280,8 @@ TEST(SolverInterrupt, SigintWhileWritingLetsEveryFileBeWrittenAndExits130) {
 // name the signals (`first_label`, `second_label`).
 void expect_stopped_while_writing(int first, const std::string& first_label, int second,
                                   const std::string& second_label) {
-  const std::string name = "stopped-" + std::to_string(first) + "-" + std::to_string(getpid());
-  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / name;
+  const std::string folder = "stopped-" + std::to_string(first) + "-" + std::to_string(getpid());
+  const fs::path out = fs::path(AARAD_BINARY_DIR) / "test-interrupt" / folder;
   WritingChild child(out);
   ASSERT_GT(child.pid, 0);
   ASSERT_NE(child.err, nullptr);

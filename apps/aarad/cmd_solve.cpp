@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -68,6 +69,7 @@ int note_signal(int signal) {
 }
 
 extern "C" void on_signal_while_solving(int signal) {
+  const int saved_errno = errno;  // the interrupted code may be about to read it
   note_signal(signal);
   // A second stop signal of any of the three ends the program: each goes back to its default action.
   // (sigaction is async-signal-safe.)
@@ -78,6 +80,7 @@ extern "C" void on_signal_while_solving(int signal) {
     sigemptyset(&action.sa_mask);
     sigaction(kStopSignals[k], &action, nullptr);
   }
+  errno = saved_errno;
 }
 
 // Appends `text` to buffer[at..] within `size` bytes; async-signal-safe (no library call).
@@ -87,8 +90,12 @@ std::size_t append(char* buffer, std::size_t size, std::size_t at, const char* t
 }
 
 extern "C" void on_signal_while_writing(int signal) {
+  const int saved_errno = errno;  // a failed write of a file may be about to read it (core/atomic_file.cpp)
   const int interrupts = note_signal(signal);
-  if (g_quiet.load()) return;
+  if (g_quiet.load()) {
+    errno = saved_errno;
+    return;
+  }
   // write(2) is async-signal-safe, stdio is not.
   const char* label = signal_label(signal);
   char line[160];
@@ -102,6 +109,7 @@ extern "C" void on_signal_while_writing(int signal) {
     n = append(line, sizeof line, n, ": stopping after the file being written\n");
   }
   [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, line, n);
+  errno = saved_errno;
 }
 
 // Handles the stop signals with the handler given last to handle(), and restores the previous handling when it
