@@ -44,7 +44,7 @@ constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP};
 std::atomic<int> g_interrupts{0};
 std::atomic<int> g_first_signal{0};
 std::atomic<int> g_last_signal{0};
-std::atomic<unsigned> g_handled_signals{0};  // bit k: kStopSignals[k] has a handler of ours
+std::atomic<unsigned> g_handled_signals{0};  // bit k: kStopSignals[k] gets our handlers (StopSignalGuard)
 std::atomic<bool> g_quiet{false};
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free &&
                   std::atomic<unsigned>::is_always_lock_free,
@@ -119,7 +119,11 @@ extern "C" void on_signal_while_writing(int signal) {
 class StopSignalGuard {
  public:
   StopSignalGuard() {
-    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) sigaction(kStopSignals[k], nullptr, &previous_[k]);
+    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
+      sigaction(kStopSignals[k], nullptr, &previous_[k]);
+      if (previous_[k].sa_handler != SIG_IGN || (previous_[k].sa_flags & SA_SIGINFO)) handled_ |= 1u << k;
+    }
+    g_handled_signals.store(handled_);
   }
   ~StopSignalGuard() {
     g_handled_signals.store(0);
@@ -130,14 +134,8 @@ class StopSignalGuard {
 
   // SA_RESTART: a write to a pipe that a signal interrupts goes on instead of failing with EINTR.
   void handle(void (*handler)(int)) {
-    unsigned handled = 0;
     for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
-      if (previous_[k].sa_handler == SIG_IGN && !(previous_[k].sa_flags & SA_SIGINFO)) continue;
-      handled |= 1u << k;
-    }
-    g_handled_signals.store(handled);
-    for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
-      if ((handled >> k & 1u) == 0) continue;
+      if ((handled_ >> k & 1u) == 0) continue;
       struct sigaction action {};
       action.sa_handler = handler;
       sigemptyset(&action.sa_mask);
@@ -149,6 +147,7 @@ class StopSignalGuard {
 
  private:
   struct sigaction previous_[std::size(kStopSignals)] {};
+  unsigned handled_ = 0;  // bit k: kStopSignals[k] was not ignored when the guard began, and gets our handlers
 };
 
 // The exit code after a stop signal: 128 + the first one's number.
