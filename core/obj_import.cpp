@@ -228,14 +228,22 @@ struct ObjText {
   std::optional<MeshingHint> meshing;
 };
 
-std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t) {
+// The comments' readers say what is wrong with a comment they cannot use in `problem`, for the warning.
+std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t, std::string& problem) {
   // # aarad camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS
-  if (t.size() != 14 || t[4] != "forward" || t[8] != "up" || t[12] != "vertical_fov" || t[0] != "eye") return std::nullopt;
+  if (t.size() != 14 || t[4] != "forward" || t[8] != "up" || t[12] != "vertical_fov" || t[0] != "eye") {
+    problem = "its words are not in the order below";
+    return std::nullopt;
+  }
   std::array<double, 10> v{};
   const std::array<int, 10> at{1, 2, 3, 5, 6, 7, 9, 10, 11, 13};
   for (std::size_t i = 0; i < at.size(); ++i) {
-    const auto n = parse_number(t[static_cast<std::size_t>(at[i])]);
-    if (!n || !std::isfinite(*n)) return std::nullopt;
+    const std::string& word = t[static_cast<std::size_t>(at[i])];
+    const auto n = parse_number(word);
+    if (!n || !std::isfinite(*n)) {
+      problem = "'" + shown(word) + "' is not a finite number";
+      return std::nullopt;
+    }
     v[i] = *n;
   }
   Camera camera;
@@ -244,26 +252,58 @@ std::optional<Camera> parse_camera_comment(const std::vector<std::string>& t) {
   camera.up = Vec3(v[6], v[7], v[8]);
   camera.vertical_fov = v[9];
   const double lf = glm::length(camera.forward), lu = glm::length(camera.up);
-  if (lf == 0.0 || lu == 0.0 || !(camera.vertical_fov > 0.0 && camera.vertical_fov < kPi)) return std::nullopt;
+  if (!(lf > 0.0 && std::isfinite(lf))) {
+    problem = lf == 0.0 ? "forward is the zero vector" : "forward is too long for a double";
+    return std::nullopt;
+  }
+  if (!(lu > 0.0 && std::isfinite(lu))) {
+    problem = lu == 0.0 ? "up is the zero vector" : "up is too long for a double";
+    return std::nullopt;
+  }
+  if (!(camera.vertical_fov > 0.0 && camera.vertical_fov < kPi)) {
+    problem = "vertical_fov " + shown(t[13]) + " is not between 0 and pi radians";
+    return std::nullopt;
+  }
   camera.forward /= lf;
+  camera.up /= lu;
   camera.up -= glm::dot(camera.up, camera.forward) * camera.forward;
-  if (glm::length(camera.up) < 1e-9) return std::nullopt;
+  if (glm::length(camera.up) < 1e-9) {
+    problem = "up is parallel to forward";
+    return std::nullopt;
+  }
   camera.up = glm::normalize(camera.up);
   return camera;
 }
 
-std::optional<MeshingHint> parse_meshing_comment(const std::vector<std::string>& t) {
+std::optional<MeshingHint> parse_meshing_comment(const std::vector<std::string>& t, std::string& problem) {
   // # aarad meshing: patch_size P element_size E min_area A, in any order, each at most once; one left out is 0
   // (the hierarchy's default)
   static constexpr std::array<const char*, 3> kKeys{"patch_size", "element_size", "min_area"};
-  if (t.empty() || t.size() % 2 != 0) return std::nullopt;
+  if (t.empty()) {
+    problem = "it gives no size";
+    return std::nullopt;
+  }
   std::array<double, 3> v{};
   std::array<bool, 3> seen{};
   for (std::size_t i = 0; i < t.size(); i += 2) {
     const auto k = static_cast<std::size_t>(std::find(kKeys.begin(), kKeys.end(), t[i]) - kKeys.begin());
-    if (k == kKeys.size() || seen[k]) return std::nullopt;
+    if (k == kKeys.size()) {
+      problem = "'" + shown(t[i]) + "' is not one of its names";
+      return std::nullopt;
+    }
+    if (seen[k]) {
+      problem = t[i] + " is given twice";
+      return std::nullopt;
+    }
+    if (i + 1 == t.size()) {
+      problem = t[i] + " has no number after it";
+      return std::nullopt;
+    }
     const auto n = parse_number(t[i + 1]);
-    if (!n || !std::isfinite(*n) || !(*n >= 0.0)) return std::nullopt;
+    if (!n || !std::isfinite(*n) || !(*n >= 0.0)) {
+      problem = t[i] + " '" + shown(t[i + 1]) + "' is not a finite number >= 0";
+      return std::nullopt;
+    }
     v[k] = *n;
     seen[k] = true;
   }
@@ -406,14 +446,18 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
                                                             "first word, '" + shown(t[1]) + "'; write the name without "
                                                             "spaces here and in the MTL file"));
     } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "camera:") {
-      text.camera = parse_camera_comment(std::vector<std::string>(t.begin() + 3, t.end()));
+      std::string problem;
+      text.camera = parse_camera_comment(std::vector<std::string>(t.begin() + 3, t.end()), problem);
       if (!text.camera)
-        warnings.push_back(InputError::format(path, number, "camera comment not understood, ignored; write '# aarad "
+        warnings.push_back(InputError::format(path, number, "camera comment not understood (" + problem + "), "
+                                                            "ignored; write '# aarad "
                                                             "camera: eye X Y Z forward X Y Z up X Y Z vertical_fov RADIANS'"));
     } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "meshing:") {
-      text.meshing = parse_meshing_comment(std::vector<std::string>(t.begin() + 3, t.end()));
+      std::string problem;
+      text.meshing = parse_meshing_comment(std::vector<std::string>(t.begin() + 3, t.end()), problem);
       if (!text.meshing)
-        warnings.push_back(InputError::format(path, number, "meshing comment not understood, ignored; write '# aarad "
+        warnings.push_back(InputError::format(path, number, "meshing comment not understood (" + problem + "), "
+                                                            "ignored; write '# aarad "
                                                             "meshing: patch_size P element_size E min_area A' (any "
                                                             "of them, in any order) with numbers >= 0 (0 or left "
                                                             "out: from the scene's size)"));

@@ -1153,16 +1153,48 @@ TEST_F(SceneImport, import_meshing_comment_is_read_back_and_a_bad_one_warns) {
   EXPECT_EQ(some.meshing->patch_size, 0.4);
   EXPECT_EQ(some.meshing->element_size, 0.0);
   EXPECT_EQ(some.meshing->min_area, 2e-3);
-  for (const char* bad : {"# aarad meshing: patch_size 0.5 element_size -1 min_area 1e-3",
-                          "# aarad meshing: patch_size 0.5 patch_size 0.25", "# aarad meshing: size 1 2 3 4 5 6",
-                          "# aarad meshing: patch_size", "# aarad meshing:"}) {
-    const Scene s = import_obj(write("bad.obj", std::string(bad) + "\n" + faces));
-    EXPECT_FALSE(s.meshing.has_value()) << bad;
-    const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& w) {
-      return w.find("bad.obj:1:") != std::string::npos && w.find("meshing comment not understood") != std::string::npos;
+  // The warning says what is wrong.
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"patch_size 0.5 element_size -1 min_area 1e-3", "(element_size '-1' is not a finite number >= 0)"},
+      {"patch_size 0.5 patch_size 0.25", "(patch_size is given twice)"},
+      {"size 1 2 3 4 5 6", "('size' is not one of its names)"},
+      {"patch_size", "(patch_size has no number after it)"},
+      {"", "(it gives no size)"}};
+  for (const auto& [words, why] : bad) {
+    const Scene s = import_obj(write("bad.obj", "# aarad meshing: " + words + "\n" + faces));
+    EXPECT_FALSE(s.meshing.has_value()) << words;
+    const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [&why](const std::string& w) {
+      return w.find("bad.obj:1: meshing comment not understood " + why + ", ignored") != std::string::npos;
     });
-    EXPECT_NE(said, s.warnings.end()) << bad;
+    EXPECT_NE(said, s.warnings.end()) << words << ": " << (s.warnings.empty() ? "" : s.warnings.front());
   }
+}
+
+TEST_F(SceneImport, import_camera_comment_that_cannot_be_used_warns_and_says_why) {
+  const std::string faces = "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"eye 0 0 0 forward 0 0 0 up 0 1 0 vertical_fov 1", "(forward is the zero vector)"},
+      {"eye 0 0 0 forward 0 0 1 up 0 0 0 vertical_fov 1", "(up is the zero vector)"},
+      {"eye 0 0 0 forward 0 0 1 up 0 0 -3 vertical_fov 1", "(up is parallel to forward)"},
+      {"eye 0 0 0 forward 0 0 1 up 0 1 0 vertical_fov 3.2", "(vertical_fov 3.2 is not between 0 and pi radians)"},
+      {"eye 0 0 0 forward 0 0 1 up 0 1 0 vertical_fov 0", "(vertical_fov 0 is not between 0 and pi radians)"},
+      {"eye nan 0 0 forward 0 0 1 up 0 1 0 vertical_fov 1", "('nan' is not a finite number)"},
+      {"eye 0 0 0 forward 1e300 1e300 0 up 0 1 0 vertical_fov 1", "(forward is too long for a double)"},
+      {"eye 0 0 0 forward 0 0 1 up 0 1 0", "(its words are not in the order below)"}};
+  for (const auto& [words, why] : bad) {
+    const Scene s = import_obj(write("cam.obj", "# aarad camera: " + words + "\n" + faces));
+    EXPECT_FALSE(s.camera.has_value()) << words;
+    const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [&why](const std::string& w) {
+      return w.find("cam.obj:1: camera comment not understood " + why + ", ignored") != std::string::npos;
+    });
+    EXPECT_NE(said, s.warnings.end()) << words << ": " << (s.warnings.empty() ? "" : s.warnings.front());
+  }
+  // Short or long vectors that are not parallel are a camera: the test of parallel vectors is relative.
+  const Scene tiny = import_obj(write("tiny.obj", "# aarad camera: eye 0 0 0 forward 0 0 1e-12 up 0 1e-12 1e-11 "
+                                                  "vertical_fov 1\n" + faces));
+  ASSERT_TRUE(tiny.camera.has_value());
+  EXPECT_NEAR(tiny.camera->up.y, 1.0, 1e-15);
+  EXPECT_NEAR(tiny.camera->up.z, 0.0, 1e-15);
 }
 
 TEST(SceneModel, scene_build_surfaces_tolerance_is_relative_to_scene_size) {
