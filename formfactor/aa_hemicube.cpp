@@ -296,8 +296,13 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     if (signed_area(out) < 0.0) std::reverse(out.begin(), out.end());
   };
   // 1 / depth of receiver i's plane on this face, in the task's pixel coordinates (as offer() keys it).
+  // Scaled by the shot's power of two (PreparedReceivers::inverse_depth_scale), exactly.
+  const double key_scale = prepared_.inverse_depth_scale();
   const auto depth_of = [&](std::uint32_t i) {
     InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
+    depth.alpha *= key_scale;
+    depth.beta *= key_scale;
+    depth.gamma *= key_scale;
     depth.gamma += depth.alpha * shift;
     return depth;
   };
@@ -313,8 +318,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
   for (const std::uint32_t i : candidates) {
     const std::size_t m = place(i);
     if (m == 0 || (masked && !tiles->overlaps(box.x_min, box.x_max, box.y_min, box.y_max))) continue;
-    InverseDepth depth = inverse_depth(face, prepared_.local_plane(i), half);
-    depth.gamma += depth.alpha * shift;  // in the task's pixel coordinates
+    const InverseDepth depth = depth_of(i);  // in the task's pixel coordinates
     const std::uint32_t receiver = i;
     const std::uint32_t surface = receivers.surface(i);
     const InverseDepthRange surface_range = prepared_.surface_inverse_depths(i, face);

@@ -291,6 +291,15 @@ void PreparedReceivers::prepare_surface_ranges(const ReceiverView& receivers) {
   // value at the box's centre plus or minus the half extents weighed by the face axis' absolute components. The
   // ranges are widened by 1e-12 of their magnitude, for the rounding of the box's centre and of the dot products.
   find_surface_boxes(receivers);
+  Vec3 all_lo(std::numeric_limits<double>::infinity()), all_hi(-std::numeric_limits<double>::infinity());
+  for (const auto& [lo, hi] : surface_boxes_) {
+    all_lo = glm::min(all_lo, lo);
+    all_hi = glm::max(all_hi, hi);
+  }
+  const Vec3 size = all_hi - all_lo;
+  const double extent = std::max({size.x, size.y, size.z});
+  const double scale = extent > 0.0 && std::isfinite(extent) ? std::ldexp(1.0, std::ilogb(extent)) : 1.0;
+  inverse_depth_scale_ = scale;
   surface_ranges_.resize(surface_boxes_.size() * kHemicubeFaces);
   for (std::size_t slot = 0; slot < surface_boxes_.size(); ++slot) {
     const auto& [lo, hi] = surface_boxes_[slot];
@@ -307,7 +316,7 @@ void PreparedReceivers::prepare_surface_ranges(const ReceiverView& receivers) {
       const double a_mid = to_face(face, mid).x, a_reach = to_face(face, reach).x;
       const double a_lo = a_mid - std::abs(a_reach), a_hi = a_mid + std::abs(a_reach);
       surface_ranges_[slot * kHemicubeFaces + static_cast<std::size_t>(f)] = {
-          a_hi > 0.0 ? 1.0 / a_hi : 0.0, a_lo > 0.0 ? 1.0 / a_lo : std::numeric_limits<double>::infinity()};
+          a_hi > 0.0 ? scale / a_hi : 0.0, a_lo > 0.0 ? scale / a_lo : std::numeric_limits<double>::infinity()};
     }
   }
 }

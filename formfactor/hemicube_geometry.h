@@ -475,9 +475,17 @@ class PreparedReceivers {
   // scene's axes, of the points of the view's receivers with its surface id (for a view marked as refining the one
   // the boxes were found for, that view's boxes, which hold it). The same for every piece of one surface in a shot,
   // whole or a subset.
+  // In units of inverse_depth_scale(): the ranges are multiplied by it.
   InverseDepthRange surface_inverse_depths(std::size_t i, HemicubeFace face) const {
     return surface_ranges_[std::size_t{surface_slot_[i]} * kHemicubeFaces + static_cast<std::size_t>(face)];
   }
+  // After prepare_surface_ranges: a power of two near the extent of the surfaces' boxes, by which the AA hemicube
+  // multiplies every 1 / depth of the shot, so that its keys are near 1 at any scene scale. The keys' spreads are
+  // floats (coverage_list.h), which hold 1e-38 to 3e38: a scene 1e45 across has keys near 1e-45, whose spreads
+  // rounded to 0 or to the smallest subnormal, and one 1e-40 across keys near 1e40, whose spreads overflowed. A
+  // power of two scales every key, spread and range exactly, so the lists, and the factors, are those of the scene
+  // scaled to size, bit for bit.
+  double inverse_depth_scale() const { return inverse_depth_scale_; }
   // For every task k of face_tasks on `face`, the receivers that may touch its columns (their face_mask has the
   // task_mask; after prepare_subset, only those it put on that task's list), in order, into lists' list k: one pass
   // without branches over the receivers for all the face's tasks, so a task's loop does not mispredict on every
@@ -557,7 +565,8 @@ class PreparedReceivers {
   std::vector<std::uint32_t> surface_slot_;
   std::unordered_map<std::uint32_t, std::uint32_t> slot_of_surface_;
   std::vector<std::array<Vec3, 2>> surface_boxes_;
-  std::vector<InverseDepthRange> surface_ranges_;  // kHemicubeFaces per slot
+  std::vector<InverseDepthRange> surface_ranges_;  // kHemicubeFaces per slot, times inverse_depth_scale_
+  double inverse_depth_scale_ = 1.0;
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'

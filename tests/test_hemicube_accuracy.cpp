@@ -775,6 +775,49 @@ TEST(HemicubeAccuracy, RoomWithABlockOnTheFloorSumsToOne) {
   expect_closed_sums(view, shooters, 1e-12, "room with block");
 }
 
+// The room with a block at the scales the import accepts (coordinates up to 1e50, sizes down to 1e-50). The AA
+// hemicube's depth keys are 1 / depth: scaled by a power of two, the scene must give the same factors bit for bit,
+// and at any scale the factors still sum to 1. The keys' spreads are floats: before the shot's keys were scaled to
+// the scene's size, a room 1e45 across lost 1.1e-5 of a shot (spreads below a float's range) and one 1e-45
+// across 6e-6 and more (spreads beyond it), the receivers behind the block seen through it.
+TEST(HemicubeAccuracy, AaHemicubeGivesTheSameFactorsAtEveryScale) {
+  const ReceiverView unit = room_with_block();
+  const auto scaled = [&unit](double k) {
+    ReceiverView view;
+    for (std::size_t i = 0; i < unit.size(); ++i) {
+      Polygon polygon;
+      for (const Vec3& p : unit.polygon(i)) polygon.push_back(p * k);
+      Plane plane = unit.plane(i);
+      plane.d *= k;
+      view.add(polygon, plane, unit.surface(i), unit.patch(i));
+    }
+    return view;
+  };
+  const std::vector<Shooter> shooters = {
+      rotated_shooter({0.31, 0.72, 0.4}, glm::normalize(Vec3(0.4, -0.3, -1.0)), 0.5),
+      rotated_shooter({0.15, 0.3, 0.1}, glm::normalize(Vec3(1.0, 1.0, 0.2)), 0.2),
+      rotated_shooter({0.8, 1.1, 0.6}, glm::normalize(Vec3(-0.7, -1.0, -0.6)), 1.1),
+  };
+  AaHemicubeBackend aa(100);
+  for (const Shooter& s : shooters) {
+    std::vector<double> reference(unit.size(), 0.0);
+    aa.compute(s, unit, {}, reference);
+    for (const double k : {0x1p-166, 0x1p-133, 0x1p-100, 0x1p-50, 0x1p50, 0x1p100, 0x1p133, 0x1p166, 1e-45, 1e45}) {
+      const ReceiverView view = scaled(k);
+      Shooter at = s;
+      at.centre *= k;
+      std::vector<double> out(view.size(), 0.0);
+      aa.compute(at, view, {}, out);
+      EXPECT_NEAR(std::accumulate(out.begin(), out.end(), 0.0), 1.0, 1e-12) << k;
+      int exponent = 0;
+      if (std::frexp(k, &exponent) != 0.5) continue;  // not a power of two
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < out.size(); ++i) differ += out[i] != reference[i];
+      EXPECT_EQ(differ, 0u) << k;
+    }
+  }
+}
+
 // A closed room whose floor runs on past one of its walls, outside: the floor outside is the same surface as the
 // floor inside and meets it along the wall's foot. Seen from inside, the wall hides it, so the factors to the room
 // sum to 1 and the floor outside gets nothing. At the wall's foot a pixel holds the floor inside, the wall's foot

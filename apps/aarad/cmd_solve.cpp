@@ -30,6 +30,7 @@
 #include <optional>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 namespace aarad::app {
 namespace {
@@ -307,6 +308,30 @@ void run_solve(SolveCommandOptions options) {
                    amount);
     }
 
+    // The books that do not balance, even with --quiet.
+    const double emitted = solver.emitted_flux().sum();
+    if (escaped < -0.01 * emitted && !options.solver.overshoot && !(options.solver.relaxation > 1.0)) {
+      // More absorbed and still unshot than was emitted: form factors from some point add up to more than 1.
+      // (Over-relaxation and overshooting take back flux that earlier shots sent out of the scene: with them
+      // the escaped flux may be below 0 for a while.)
+      std::fprintf(stderr,
+                   "aarad: warning: %.1f %% more flux than was emitted is absorbed or still unshot: the form factors "
+                   "from some patches add up to more than 1%s\n",
+                   -100.0 * escaped / emitted,
+                   options.solver.backend == "analytic" ? " (the analytic back end ignores occlusion)" : "");
+    }
+    const Rgb absorbed = solver.absorbed_flux();
+    if (!solver.diverged() && std::min({absorbed.r, absorbed.g, absorbed.b}) < 0.0) {
+      // Over-relaxation and overshooting shoot flux that later shots take back; a negative total absorbed means
+      // radiosities below zero, which a converged solve does not leave.
+      std::fprintf(stderr,
+                   "aarad: warning: the absorbed flux is negative (%.3g): some radiosities are below zero, and the "
+                   "images clip them to black; %s\n",
+                   absorbed.sum(),
+                   options.solver.relaxation > 1.0 ? "--relaxation sends back too much here: try a smaller one"
+                                                   : "solve to a smaller --converge");
+    }
+
     // Once, even with --quiet: the mesh is coarser than --gradient asks where splits were refused.
     if (solver.element_limit_reached()) {
       std::fprintf(stderr,
@@ -386,7 +411,6 @@ void run_solve(SolveCommandOptions options) {
       std::fprintf(summary, "aarad: %s after %lld shots (unshot %.3f %%), %zu elements, max level %d, %.2f s\n",
                    state, static_cast<long long>(solver.shots()), 100.0 * solver.unshot_fraction(),
                    solver.hierarchy().leaf_count(), solver.max_leaf_level(), total);
-      const double emitted = solver.emitted_flux().sum();
       if (escaped > 0.01 * emitted) {
         std::fprintf(summary, "aarad: %.1f %% of the emitted flux left the scene (an open scene, or faces turned away)\n",
                      100.0 * escaped / emitted);
@@ -401,17 +425,29 @@ void run_solve(SolveCommandOptions options) {
   if (solver.diverged()) {
     // Why, as far as the options tell: overshooting's ambient term assumes a closed scene; the analytic back end's
     // factors ignore occlusion, so from a patch that sees surfaces behind one another they add up to more than 1.
-    std::string why;
-    if (options.solver.overshoot) {
-      why = "overshooting sends rho x the ambient term on top of each shot, and that term assumes a closed scene: "
-            "where light leaves the scene it sends out more than comes back; solve without --overshoot";
-    } else if (options.solver.backend == "analytic") {
-      why = "the analytic back end ignores what hides one surface from another, so the form factors from some patch "
-            "add up to more than 1; use --ff aa-hemicube";
-    } else {
-      why = "the form factors from some patch add up to more than 1";
-      if (options.solver.relaxation > 1.0) why += ", or --relaxation sends too much back; try a smaller one";
+    // Overshooting is blamed for an open scene only where light does leave it (escaped flux).
+    std::vector<std::string> causes;
+    if (options.solver.backend == "analytic") {
+      causes.push_back("the analytic back end ignores what hides one surface from another, so the form factors from "
+                       "some patch add up to more than 1; use --ff aa-hemicube");
     }
+    if (options.solver.overshoot && solver.escaped_flux().sum() > 0.01 * solver.emitted_flux().sum()) {
+      causes.push_back("overshooting sends rho x the ambient term on top of each shot, and that term assumes a closed "
+                       "scene: where light leaves the scene it sends out more than comes back; solve without "
+                       "--overshoot");
+    }
+    if (options.solver.relaxation > 1.0) {
+      causes.push_back(std::string("--relaxation sends too much back") +
+                       (options.solver.overshoot ? " on top of overshooting's ambient term" : "") +
+                       "; try a smaller one");
+    }
+    if (causes.empty()) {
+      causes.push_back(options.solver.overshoot
+                           ? "overshooting's ambient term sends out more than comes back; solve without --overshoot"
+                           : "the form factors from some patch add up to more than 1");
+    }
+    std::string why = causes.front();
+    for (std::size_t i = 1; i < causes.size(); ++i) why += "; or " + causes[i];
     std::fprintf(stderr,
                  "aarad: error: the solve diverged: after %lld shots the net unshot flux is %.3g times the emitted "
                  "flux; %s\n",
