@@ -35,10 +35,19 @@ struct Host {
   double t = 0.0;
 };
 
-// Smoothing groups (Scene's Face::smoothing): corner vertices of different surfaces of one scene group and one
-// nonzero smoothing group that lie at one point, within the distance at which the initial meshing joins
-// vertices, pool their leaves' areas and values, so that each of them takes the area-weighted mean of all the
-// leaves around the point and the display is continuous across the edges between those surfaces. Hanging
+// Whether two surfaces of one smoothing group show one curved surface across their shared edge: their fronts turn
+// less than a right angle apart. The two faces of a wall modelled with both sides (faces are one-sided), back to
+// back in one smoothing group (Blender writes `s 1` for every smooth-shaded object), are not: the lit side's
+// radiosity showed on the dark side.
+bool facing_alike(const Scene& scene, std::uint32_t a, std::uint32_t b) {
+  return glm::dot(scene.surfaces[a].plane.normal, scene.surfaces[b].plane.normal) > 0.0;
+}
+
+// Smoothing groups (Scene's Face::smoothing): corner vertices of different surfaces of one scene group, one
+// nonzero smoothing group and one material, facing alike, that lie at one point, within the distance at which the
+// initial meshing joins vertices, pool their leaves' areas and values, so that each of them takes the area-weighted
+// mean of all the leaves around the point and the display is continuous across the edges between those surfaces.
+// Radiosity is reflectance times what arrives, so it steps where the material changes, smooth or not. Hanging
 // vertices keep their host edge's interpolation (a surface's outer boundary has none); hang_smoothed_vertices then
 // handles the boundary vertices that the other side of such an edge lacks.
 void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
@@ -47,11 +56,11 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
   // Candidates by cell of side `tolerance` (as the initial meshing welds vertices): two within the tolerance lie in
   // the same cell or in neighbouring ones.
   struct Candidate {
-    std::uint32_t group, smoothing;
+    std::uint32_t group, smoothing, material;
     std::array<double, 3> cell;
     Vec3 p;
     int vertex;
-    auto key() const { return std::tie(group, smoothing, cell); }
+    auto key() const { return std::tie(group, smoothing, material, cell); }
   };
   std::vector<Candidate> candidates;
   for (std::size_t v = 0; v < vertex_surface.size(); ++v) {
@@ -59,13 +68,13 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
     const Surface& surface = m.scene().surfaces[vertex_surface[v]];
     if (surface.smoothing == 0) continue;
     const Vec3 p = m.point(static_cast<int>(v));
-    candidates.push_back({surface.group, surface.smoothing,
+    candidates.push_back({surface.group, surface.smoothing, surface.material,
                           {std::floor(p.x / tolerance), std::floor(p.y / tolerance), std::floor(p.z / tolerance)}, p,
                           static_cast<int>(v)});
   }
   if (candidates.empty()) return;
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-    return std::tie(a.group, a.smoothing, a.cell, a.vertex) < std::tie(b.group, b.smoothing, b.cell, b.vertex);
+    return std::tuple_cat(a.key(), std::tie(a.vertex)) < std::tuple_cat(b.key(), std::tie(b.vertex));
   });
   // Union-find over the candidates.
   std::vector<std::size_t> root(candidates.size());
@@ -78,7 +87,9 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
     const Candidate &a = candidates[i], &b = candidates[j];
     if (std::abs(b.p.x - a.p.x) <= tolerance && std::abs(b.p.y - a.p.y) <= tolerance &&
         std::abs(b.p.z - a.p.z) <= tolerance &&
-        vertex_surface[static_cast<std::size_t>(a.vertex)] != vertex_surface[static_cast<std::size_t>(b.vertex)])
+        vertex_surface[static_cast<std::size_t>(a.vertex)] != vertex_surface[static_cast<std::size_t>(b.vertex)] &&
+        facing_alike(m.scene(), vertex_surface[static_cast<std::size_t>(a.vertex)],
+                     vertex_surface[static_cast<std::size_t>(b.vertex)]))
       root[find(j)] = find(i);
   };
   const auto by_key = [](const Candidate& c, const Candidate& d) { return c.key() < d.key(); };
@@ -115,14 +126,15 @@ void pool_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
   }
 }
 
-// Smoothing groups, after the pooling: where the two sides of an edge between surfaces of one scene group and one
-// nonzero smoothing group are split differently, a boundary vertex of one side lies strictly inside a boundary edge
-// of the other, which shows the linear interpolation of its ends there. Such a vertex hangs across the surfaces: it
-// takes that interpolation too, as a T-vertex inside a surface does, so both sides show one line. Its host edge's
-// ends may hang across themselves when the two sides' vertices interleave (an edge cut in three on one side and in
-// two on the other): then only one line through the nearest vertices that hang on no edge is continuous on both
-// sides, so the host becomes that pair, found by walking along the line away from the vertex. "Strictly inside"
-// and "on the edge" mean farther than the pooling tolerance from both ends and within it of the segment.
+// Smoothing groups, after the pooling: where the two sides of an edge between surfaces of one scene group, one nonzero
+// smoothing group and one material, facing alike, are split differently, a boundary vertex of one side lies strictly
+// inside a boundary edge of the other, which shows the linear interpolation of its ends there. Such a vertex hangs
+// across the surfaces: it takes that interpolation too, as a T-vertex inside a surface does, so both sides show one
+// line. Its host edge's ends may hang across themselves when the two sides' vertices interleave (an edge cut in three
+// on one side and in two on the other): then only one line through the nearest vertices that hang on no edge is
+// continuous on both sides, so the host becomes that pair, found by walking along the line away from the vertex.
+// "Strictly inside" and "on the edge" mean farther than the pooling tolerance from both ends and within it of the
+// segment.
 void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint32_t> vertex_surface,
                             std::span<const double> weight, std::vector<Host>& host) {
   const double tolerance = kPlaneDistance * m.scene().diagonal();
@@ -135,14 +147,15 @@ void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
   // vertex's cell or in one of the 8 around it on the side of its nearer cell walls. The side is the median length
   // of the edges, so a cell holds a few edges and an edge a few cells; cells are found through a hash table.
   struct CellKey {
-    std::uint32_t group, smoothing;
+    std::uint32_t group, smoothing, material;
     std::array<double, 3> cell;
     bool operator==(const CellKey&) const = default;
-    auto tied() const { return std::tie(group, smoothing, cell); }
+    auto tied() const { return std::tie(group, smoothing, material, cell); }
   };
   struct CellHash {
     std::size_t operator()(const CellKey& k) const {
       std::size_t h = std::hash<std::uint64_t>()((std::uint64_t{k.group} << 32) ^ k.smoothing);
+      h = h * 0x9E3779B97F4A7C15ull ^ k.material;
       for (const double x : k.cell) h = h * 0x9E3779B97F4A7C15ull ^ std::hash<double>()(x);
       return h;
     }
@@ -174,7 +187,7 @@ void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
     const Vec3 pa = m.point(a), d = m.point(b) - pa;
     const double pieces = std::ceil(4.0 * glm::length(d) / side);
     for (double i = 0.0; i <= pieces; ++i)
-      entries.push_back({{surface.group, surface.smoothing, cell_of(pa + (i / pieces) * d)}, a, b});
+      entries.push_back({{surface.group, surface.smoothing, surface.material, cell_of(pa + (i / pieces) * d)}, a, b});
   }
   std::sort(entries.begin(), entries.end(), [](const Entry& c, const Entry& d) {
     return std::tuple_cat(c.key.tied(), std::tie(c.a)) < std::tuple_cat(d.key.tied(), std::tie(d.a));
@@ -199,6 +212,8 @@ void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
     const Vec3 p = m.point(v), pa = m.point(e.a), d = m.point(e.b) - pa;
     const double t = glm::dot(p - pa, d) / glm::dot(d, d);
     if (vertex_surface[static_cast<std::size_t>(e.a)] == vertex_surface[static_cast<std::size_t>(v)] ||
+        !facing_alike(m.scene(), vertex_surface[static_cast<std::size_t>(e.a)],
+                      vertex_surface[static_cast<std::size_t>(v)]) ||
         !(t > 0.0 && t < 1.0) || glm::length(p - pa) <= tolerance || glm::length(p - m.point(e.b)) <= tolerance ||
         glm::length(pa + t * d - p) > tolerance)
       return false;
@@ -216,7 +231,7 @@ void hang_smoothed_vertices(const Hierarchy::Impl& m, std::span<const std::uint3
     }
     bool found = false;
     for (int corner = 0; corner < 8 && !found; ++corner) {
-      const CellKey key{surface.group, surface.smoothing,
+      const CellKey key{surface.group, surface.smoothing, surface.material,
                         {(corner & 1) ? toward[0] : own[0], (corner & 2) ? toward[1] : own[1],
                          (corner & 4) ? toward[2] : own[2]}};
       const auto cell = cells.find(key);

@@ -119,22 +119,35 @@ TEST(HierarchyDisplay, HangingVertexTakesTheInterpolationAlongItsHostEdge) {
 // area-weighted mean of both leaves, (1 + 3 sqrt(1.09)) / (1 + sqrt(1.09)); the outer corners keep 1 and 3.
 // Without smoothing, with two smoothing groups, or with the squares in two scene groups, each copy keeps its
 // own surface's value.
+// Nor with two materials (radiosity steps where the reflectance does: a reviewer's floor of a red and a white quad in
+// one smoothing group showed pink beside the seam), nor where the second square turns its back to the first (a wall
+// modelled as two faces back to back in one smoothing group showed the lit side's radiosity on the dark side).
 TEST(HierarchyDisplay, SmoothingGroupsPoolTheCornersSharedAcrossSurfaces) {
   struct Case {
     const char* what;
     std::uint32_t smoothing_a, smoothing_b;
     bool two_groups;
     bool pooled;
+    bool two_materials = false;
+    bool back_to_back = false;
   };
   for (const Case c : {Case{"one smoothing group", 1, 1, false, true}, Case{"no smoothing", 0, 0, false, false},
-                       Case{"two smoothing groups", 1, 2, false, false}, Case{"two scene groups", 1, 1, true, false}}) {
+                       Case{"two smoothing groups", 1, 2, false, false}, Case{"two scene groups", 1, 1, true, false},
+                       Case{"two materials", 1, 1, false, false, true},
+                       Case{"back to back", 1, 1, false, false, false, true}}) {
     SCOPED_TRACE(c.what);
     Scene scene;
     scene.name = "bent";
     const std::uint32_t grey = scene.add_material(Material{"grey", Rgb(0.5), Rgb(0.0)});
+    const std::uint32_t red = scene.add_material(Material{"red", Rgb(0.7, 0.05, 0.05), Rgb(0.0)});
     const std::uint32_t first = scene.add_group("a"), second = c.two_groups ? scene.add_group("b") : first;
     scene.add_face(first, grey, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, 0, c.smoothing_a);
-    scene.add_face(second, grey, {{1, 0, 0}, {2, 0, 0.3}, {2, 1, 0.3}, {1, 1, 0}}, 0, c.smoothing_b);
+    // Bent up by 0.3 over its width; back to back, the same square wound the other way, facing down (its normal
+    // . a's < 0).
+    const std::vector<Vec3> b_corners =
+        c.back_to_back ? std::vector<Vec3>{{1, 0, 0}, {1, 1, 0}, {2, 1, 0.3}, {2, 0, 0.3}}
+                       : std::vector<Vec3>{{1, 0, 0}, {2, 0, 0.3}, {2, 1, 0.3}, {1, 1, 0}};
+    scene.add_face(second, c.two_materials ? red : grey, b_corners, 0, c.smoothing_b);
     scene.build_surfaces();
     ASSERT_EQ(scene.surfaces.size(), 2u);
     const Hierarchy h(scene, sizes(2.0, 2.0));
