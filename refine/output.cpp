@@ -42,6 +42,25 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
     }
     if (std::any_of(values.begin(), values.end(), lit)) break;
   }
+  // The lit area, when it is at most 1 % of the area: then the 99th percentile is an unlit leaf's 0, which left
+  // exposure 1 and the images depending on Ke (a small card under a lamp on a black floor was dark at Ke 10 and
+  // white at Ke 1e4). The percentile is then the lit area's.
+  double all = 0.0, lit_area = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    all += areas[i];
+    if (lit(values[i])) lit_area += areas[i];
+  }
+  if (lit_area > 0.0 && lit_area <= 0.01 * all) {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      if (!lit(values[i])) continue;
+      values[kept] = values[i];
+      areas[kept] = areas[i];
+      ++kept;
+    }
+    values.resize(kept);
+    areas.resize(kept);
+  }
   return ToneMap::from_percentile(values, areas, 0.99);
 }
 

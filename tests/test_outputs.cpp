@@ -571,6 +571,42 @@ TEST(OutputsToneMap, EmittersSetTheExposureWhenNothingElseIsLit) {
   EXPECT_DOUBLE_EQ(solution_tone_map(solver, displayed).exposure, 1.0 / 0.01);
 }
 
+// A small white card under a lamp on a black floor (a reviewer's scene): the card is lit, the floor (Kd 0) is not, and
+// the card is less than 1 % of the area that does not emit, so the 99th percentile over all of it is 0. Exposure 1
+// then drew the card dark at Ke 10, black at Ke 0.001 and white at Ke 1e4; the percentile is now the lit area's,
+// and the exposure follows Ke.
+TEST(OutputsToneMap, ALitAreaOfUnderOnePercentSetsTheExposure) {
+  for (const double ke : {10.0, 1e-3, 1e4}) {
+    Scene scene;
+    scene.name = "card on a black floor";
+    const std::uint32_t floor = scene.add_group("floor"), card = scene.add_group("card"), lamp = scene.add_group("lamp");
+    const std::uint32_t black = scene.add_material({"black", Rgb(0.0), Rgb(0.0)});
+    const std::uint32_t white = scene.add_material({"white", Rgb(0.7), Rgb(0.0)});
+    const std::uint32_t glow = scene.add_material({"glow", Rgb(0.0), Rgb(ke)});
+    scene.add_face(floor, black, {{-5, 0, 5}, {5, 0, 5}, {5, 0, -5}, {-5, 0, -5}});
+    scene.add_face(card, white, {{-0.25, 0.01, 0.25}, {0.25, 0.01, 0.25}, {0.25, 0.01, -0.25}, {-0.25, 0.01, -0.25}});
+    scene.add_face(lamp, glow, {{-0.1, 1, -0.1}, {0.1, 1, -0.1}, {0.1, 1, 0.1}, {-0.1, 1, 0.1}});  // facing down
+    scene.build_surfaces();
+    SolverOptions options;
+    options.adaptive = false;
+    options.meshing.patch_size = 20.0;
+    options.meshing.element_size = 20.0;
+    Solver solver(scene, options);
+    solver.run();
+    const std::vector<Rgb> displayed = solver.displayed_radiosity();
+    double brightest_card = 0.0;
+    for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
+      if (scene.surfaces[solver.hierarchy().surface(leaf)].group == card)
+        brightest_card = std::max(brightest_card, displayed[leaf].r);
+    }
+    ASSERT_GT(brightest_card, 0.0) << ke;
+    // The card fills the lit area: exposure x its brightest value is at least 0.99's share of it, and at most 1.
+    const double exposure = solution_tone_map(solver, displayed).exposure;
+    EXPECT_GT(exposure * brightest_card, 0.5) << ke;
+    EXPECT_LE(exposure * brightest_card, 1.0 + 1e-12) << ke;
+  }
+}
+
 // The report's numbers for the furnace (E = 1, rho = 0.5 everywhere: B = E / (1 - rho) = 2 on every surface): the
 // room of 4 x 3 x 5 (area 94), block_a 1 x 0.9 x 1.2 (area 6.36, six faces of its group) and block_b 1 x 0.9 x 0.7
 // (area 4.46) emit 104.82; each group's mean radiosity is its leaves' area-weighted mean, within a few per cent of 2
