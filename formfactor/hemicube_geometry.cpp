@@ -30,8 +30,8 @@ double side_corner_form_factor(double y, double z) {
 }
 
 HemicubeGeometry::HemicubeGeometry(int resolution, DeltaRule rule)
-    : resolution_(resolution), side_rows_((resolution + 1) / 2) {
-  check_resolution(resolution);
+    // Checked before anything is computed from it (resolution + 1 overflows at INT_MAX).
+    : resolution_((check_resolution(resolution), resolution)), side_rows_((resolution + 1) / 2) {
   const int n = resolution_;
   const double cell = 2.0 / n;
   const bool odd = n % 2 != 0;
