@@ -53,6 +53,15 @@ TEST(FormfactorCoverageList, SameSurfacePiecesShareTheFractionInFront) {
   EXPECT_DOUBLE_EQ(e[2], 0.75 * 0.5);  // not 0.75 * (1 - 0.5 - 0.125)
   EXPECT_DOUBLE_EQ(e[3], 0.0);         // behind a full surface
   EXPECT_DOUBLE_EQ(f, 1.0);
+  // The same pieces with depth keys apart (2.0 and 2.3, no spread: no layer joins them): only their surface id
+  // makes them share the fraction in front (a reviewer's check; at one depth the layer rule alone gave it).
+  const std::vector<CoverageEntry> apart = {{1.0, 0.5, 0, 7}, {2.0, 0.25, 1, 3}, {2.3, 0.75, 2, 3}, {3.0, 0.9, 3, 4}};
+  std::vector<double> g(4);
+  const double f_apart = resolve_front_to_back(apart, [&](std::uint32_t r, double v) { g[r] = v; });
+  EXPECT_DOUBLE_EQ(g[1], 0.25 * 0.5);
+  EXPECT_DOUBLE_EQ(g[2], 0.75 * 0.5);
+  EXPECT_DOUBLE_EQ(g[3], 0.0);
+  EXPECT_DOUBLE_EQ(f_apart, 1.0);
 }
 
 TEST(FormfactorCoverageList, SurfacesMeetingInThePixelShareItSideBySide) {

@@ -307,7 +307,10 @@ TEST(HemicubeAccuracy, PaperFigure1SmallReceiverBetweenPixelCentres) {
 }
 
 TEST(HemicubeAccuracy, CoplanarPiecesGetTheWholeSurfaceTotal) {
-  // One surface, whole or cut into 13 x 7 pieces, partly behind an occluder: same AA total to 1e-9.
+  // One surface, whole or cut into 13 x 7 pieces, partly behind an occluder: same AA total to 1e-9. Coplanar pieces
+  // have one depth key and spread in every pixel, so the layer rule shares the pixel among them as the surface rule
+  // does (a reviewer found the test passing with every piece its own surface id); the list-level test
+  // FormfactorCoverageList.SameSurfacePiecesShareTheFractionInFront isolates the surface rule.
   const Vec3 o{-0.8, -0.6, 1.3}, e1{0, 1.7, 0.2}, e2{1.9, 0, 0.1};
   const Polygon occluder = rectangle({-0.3, -0.2, 0.8}, {0, 0.5, 0}, {0.6, 0, 0});
   for (double angle : {0.0, 0.37}) {

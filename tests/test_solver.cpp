@@ -329,8 +329,12 @@ TEST(SolverFurnace, AaHemicubeAtResolution100IsWithinOnePercent) {
   // Energy balance of the AA run at convergence (issue 5, references.md): sum (1 - rho) B A + unshot flux =
   // emitted flux to 1e-3 relative, per channel.
   for (int c = 0; c < 3; ++c) EXPECT_LT(aa.balance[c], 1e-3) << "channel " << c;
-  // The classical hemicube at the same resolution, reported for comparison (the paper's point: worse).
+  // The classical hemicube at the same resolution, reported for comparison (the paper's point: worse). Measured
+  // 0.40 % RMS, 1.56 % worst, against the AA hemicube's 0.23 % and 1.43 %: the AA run must be the better one (a
+  // reviewer's check that the test would notice the classical back end standing in for the AA one).
   const FurnaceFigures classical = solve_furnace("hemicube", 100);
+  EXPECT_LT(aa.rms, classical.rms);
+  EXPECT_LT(aa.worst, classical.worst);
   RecordProperty("aa_rms", std::to_string(aa.rms));
   RecordProperty("classical_rms", std::to_string(classical.rms));
 }
