@@ -750,14 +750,19 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
   // end; a crossing splits both at one point, computed once, and taken as the segment end, outline point or earlier
   // crossing within `weld` of it. Left to the triangulation, a crossing was computed there, a rounding away from a
   // point that is the same where three surfaces meet: two vertices an ulp apart, and a triangle of no area.
+  //
+  // The ends of two segments within `weld` of each other become one point first (the outline's points before them):
+  // two contact lines that start where one surface meets two others (a floor and a face lying in the floor's plane,
+  // both cut through by a third) were computed apart, an ulp apart, and the triangulation made a patch of no area
+  // between them (a reviewer's fuzzing; the solve then stopped with "receiver runs clockwise").
   std::vector<std::vector<std::pair<double, Vec2>>> met(segments.size());
   {
     Welder<bool> crossings(weld);
-    for (std::size_t i = 0; i < segments.size(); ++i)
-      if (used[i] != 0)
-        for (const Vec2& x : end_at[i]) crossings(x, true);
     for (const auto& [ends, n] : edges)
       for (const int v : {ends.first, ends.second}) crossings(at[static_cast<std::size_t>(v)], true);
+    for (std::size_t i = 0; i < segments.size(); ++i)
+      if (used[i] != 0)
+        for (Vec2& x : end_at[i]) x = crossings(x, true).first;
     std::vector<Box> first = segment_boxes(weld, &used), second = first;
     const auto parameter = [&](std::size_t i, const Vec2& x) {
       const Vec2 d = segments[i].b - segments[i].a;
@@ -834,10 +839,20 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
       // Cut into pieces no longer than an element, so that the triangles along the line are element-sized: whole,
       // the piece was one edge of a sliver reaching from one end of the line to the other (the element corners near
       // it are left out), whose centroid then shot to the line's far end seen edge on (docs/hierarchy.md).
+      // The points are computed from the lower end (by x, then y) whichever way the segment runs: two segments
+      // that overlap along a line (where a surface meets two others of one plane) then cut their shared piece at the
+      // same points, not at points an ulp apart, between which the triangulation made a patch of no area.
       const auto parts = static_cast<int>(std::ceil(glm::length(to - from) / (2.0 * clear)));
+      // The pieces go from `from` to `to` as before (the triangulation's insertion order).
+      const bool forward = std::tie(from.x, from.y) < std::tie(to.x, to.y);
+      const Vec2 low = forward ? from : to, high = forward ? to : from;
+      const auto point = [&](int part) {  // part k of `parts` from `from`
+        const int step = forward ? part : parts - part;
+        return step == 0 ? low : step == parts ? high : low + (static_cast<double>(step) / parts) * (high - low);
+      };
       Vec2 start = from;
       for (int part = 1; part <= parts; ++part) {
-        const Vec2 stop = part == parts ? to : from + (static_cast<double>(part) / parts) * (to - from);
+        const Vec2 stop = point(part);
         contact_pieces.emplace_back(start, stop);
         start = stop;
       }

@@ -489,6 +489,28 @@ TEST(Hierarchy, ContactLinesCrossingWhereAThirdEndsMakeNoLeafOfNoArea) {
   EXPECT_EQ(wrong, 0u) << "of " << h.leaf_count() << " leaves";
 }
 
+// A triangle standing through a floor meets it along x = 3, z from 2 to 4, and meets a face lying in the floor's
+// plane (facing down) along the same line, z from 2 to 3: two contact lines on the triangle that overlap, from one
+// start (a reviewer's fuzzing). Each was cut into element-sized pieces from its own first end, so their shared
+// piece got points an ulp apart: 8 nodes of no area, and the solve stopped with "receiver runs clockwise".
+TEST(Hierarchy, ContactLinesOverlappingAlongOneLineMakeNoLeafOfNoArea) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("aarad-overlapping-contacts-" + std::to_string(::getpid()) + ".obj");
+  {
+    std::ofstream obj(file);
+    obj << "v 0 0 5\nv 6 0 5\nv 6 0 0\nv 0 0 0\nv 2 4 2\nv 2 4 3\nv 4 4 2\nv 4 4 3\nv 3 0 4\nv 3 0.1 2\n"
+           "v 3 -0.1 2\nv 3 1 3\nv 2 1 2\nv 2 0 2\nv 3 0 3\nv 3 0 2\nv 4 0 3\n"
+           "g floor\nf 1 2 3 4\ng lamp\nf 5 7 8 6\ng tri\nf 10 9 11\ng wall\nf 14 16 17 15\n";
+  }
+  const Scene scene = import_obj(file.string());
+  std::filesystem::remove(file);
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  std::size_t flat = 0;
+  for (NodeId node = 0; node < h.node_count(); ++node) flat += !(h.area(node) > 0.0);
+  EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
+}
+
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
 // the plane, as two triangles, is meshed as the quad with its corners moved onto the surface's plane, so no
 // child leaves its parent's plane.
