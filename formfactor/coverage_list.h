@@ -41,6 +41,8 @@
 // allocation per entry once the pools have grown to the largest face seen.
 #pragma once
 
+#include "aarad/core/scene.h"
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -65,8 +67,19 @@ inline constexpr double kFullCoverage = 1.0 - 1e-12;
 // with one wall 1e-7 inside the others' ends 3.5e-4 to 2.3e-3 (test). What side by side gives too much when the
 // entries do overlap is at most their overlap, here at most the slack (take_share caps the pixel at 1).
 inline constexpr double kLayerSlack = 1e-4;
-// Depth ranges closer than this, relative to the key, overlap (rounding of two planes evaluated at a junction).
-inline constexpr double kLayerTouch = 1e-9;
+// Depth ranges closer than this, relative to the key, overlap: the rounding of two planes evaluated at a junction,
+// which is that of the scene's coordinates, not of a double. Scene takes faces whose vertices lie within
+// kPlaneDistance of the diagonal of one plane as coplanar (scene.h), and a depth is at most about the diagonal, so
+// ranges that far apart are a rounding of the input. Two surfaces of different materials meeting in one plane (a
+// ceiling and its lamp) have their planes fitted apart: in a rotated room written with 9 digits their keys differ by
+// 1.2e-9 at their junction, while seen face on their spreads are 1e-11; with 1e-9 here the second was walked behind
+// the first and lost A_1 A_2 of every pixel along the junction (the room's factors from its floor summed to
+// 1 - 8.7e-5 at N = 100; now 1 - 1.7e-10, as with one material).
+inline constexpr double kLayerTouch = kPlaneDistance;
+// Keys closer than this, relative to the key, are one plane's (with equal spreads: same_plane_keys). Tighter than
+// kLayerTouch: two planes meeting on a pixel's ray have equal keys there, and where the view is symmetric about
+// their junction equal spreads too (a ceiling and a wall at a corner), which must not make them one plane.
+inline constexpr double kSamePlaneKeys = 1e-9;
 
 struct CoverageEntry {
   double depth = 0.0;     // any key that grows with the distance along the pixel's ray; smaller is nearer
@@ -76,11 +89,11 @@ struct CoverageEntry {
   float spread = 0.0f;        // the key ranges over [depth - spread, depth + spread] in the pixel (rounded up)
 };
 
-// Whether two entries have the key of one plane in the pixel: equal keys (to kLayerTouch, the rounding of two
+// Whether two entries have the key of one plane in the pixel: equal keys (to kSamePlaneKeys, the rounding of two
 // surfaces' planes computed apart) and equal spreads (to float rounding). Two different planes have equal keys only
 // where they meet on the pixel's ray, and then equal spreads only by coincidence.
 inline bool same_plane_keys(const CoverageEntry& a, const CoverageEntry& b) {
-  return std::abs(a.depth - b.depth) <= kLayerTouch * std::abs(b.depth) &&
+  return std::abs(a.depth - b.depth) <= kSamePlaneKeys * std::abs(b.depth) &&
          std::abs(a.spread - b.spread) <= 1e-6f * std::max(a.spread, b.spread);
 }
 

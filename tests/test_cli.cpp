@@ -332,6 +332,30 @@ TEST(Cli, OvershootingThatDivergesInAnOpenSceneSaysSo) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
+// A closed room, rotated and written with 9 significant digits, whose ceiling is a lamp face and a plain face: two
+// surfaces whose planes, fitted apart, agree to about 1e-8 (a reviewer's fuzzing). Seen face on from the floor, the
+// two keys in a pixel along their junction were 1.2e-9 apart, more than the layer test's 1e-9, with spreads of 1e-11:
+// the second was walked behind the first and lost A_1 A_2 of each such pixel (the sum 1 - 8.65e-5 at N = 100, 1 -
+// 1.1e-4 at N = 50). Ranges within the scene's coplanarity (kPlaneDistance) now form one layer: 1 - 1.7e-10, as
+// with one material; the classical hemicube gives 1.
+TEST(Cli, FormfactorsOfTheAaHemicubeSumToOneWhereTwoMaterialsMeetInOnePlane) {
+  write_file("two.mtl", "newmtl w\nKd 0.5\nnewmtl light\nKd 0.5\nKe 10\n");
+  const fs::path obj = write_file(
+      "two.obj",
+      "mtllib two.mtl\nv 0 0 0\nv 3.51460314 4.78679487 0.856831136\nv 3.80916698 5.63248136 -5.07596302\n"
+      "v 0.294563844 0.845686488 -5.93279416\nv -2.42697326 1.7586507 0.130186307\n"
+      "v -2.27969134 2.18149395 -2.83621077\nv 1.2349118 6.96828882 -1.97937963\n"
+      "v 1.08762987 6.54544558 0.987017444\nv -2.13240942 2.60433719 -5.80260785\n"
+      "v 1.38219372 7.39113207 -4.94577671\ng floor\nusemtl w\nf 1 2 3 4\ng ceil\nusemtl light\nf 5 6 7 8\n"
+      "usemtl w\nf 6 9 10 7\ng x0\nf 1 5 8 2\ng x1\nf 4 3 10 9\ng z0\nf 1 4 9 5\ng z1\nf 2 8 10 3\n");
+  for (const int n : {50, 100}) {
+    const ProgramRun r = aarad("formfactors " + obj.string() + " --from floor --json --resolution " + std::to_string(n));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const double total = nlohmann::json::parse(r.out)["total"].get<double>();
+    EXPECT_NEAR(total, 1.0, 1e-9) << "N = " << n;
+  }
+}
+
 // The reasons a divergence gives follow what happened (a reviewer's cases): a closed room of reflectance 0.999 with
 // --overshoot --relaxation 1.99 diverges (it converges at 1.95, and with --overshoot alone). No light leaves it, so
 // the error names the relaxation; it blamed the open scene that overshooting assumes away.
