@@ -454,14 +454,27 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     if (count == 0) continue;
     cdt.insert_constraint(Point2(ends.first.first, ends.first.second), Point2(ends.second.first, ends.second.second));
   }
-  std::vector<Point2> seeds;  // one point in every region outside the surface (holes), which is not meshed
+  // A triangle whose centre lies in no face is outside the surface (a hole, a gap between faces), and so is what
+  // is reached from it without crossing a constraint; it is not meshed. The triangle itself is marked, not its
+  // centre handed to the mesher as a seed, which locates it again: the centre of a sliver (three points of a
+  // straight run that rounding bent, as where two strips' ends lie on one line) rounds onto one of its vertices or
+  // edges, and located there it named a triangle of the neighbouring face, whose whole region was then left out
+  // (two rotated strips 53 wide, one strip-width apart: a sliver of area 1.1e-11 whose centre was its vertex).
+  using Mesher = CGAL::Delaunay_mesher_2<Cdt, Criteria>;
+  std::vector<Cdt::Face_handle> triangles;
   std::vector<Point2> centres;
-  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    triangles.push_back(f);
     centres.push_back(CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
+  }
   const std::vector<std::uint8_t> inside = centres_in_faces(centres, polygons);
-  for (std::size_t i = 0; i < centres.size(); ++i)
-    if (inside[i] == 0) seeds.push_back(centres[i]);
-  CGAL::refine_Delaunay_mesh_2(cdt, seeds.begin(), seeds.end(), Criteria(0.125, patch_size), false);
+  if (cdt.dimension() == 2) {  // else no triangle (faces collapsed onto a line by welding): an error below
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(true);
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+      if (inside[i] == 0 && triangles[i]->is_in_domain()) Mesher::propagate_marks(triangles[i], false);
+    // With the domain specified, the mesher marks the faces reached from the unbounded side out too, as with seeds.
+    CGAL::refine_Delaunay_mesh_2(cdt, Criteria(0.125, patch_size), true);
+  }
 
   SurfaceMeshing out;
   std::map<Cdt::Vertex_handle, int> vertex_index;

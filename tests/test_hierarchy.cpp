@@ -511,6 +511,36 @@ TEST(Hierarchy, ContactLinesOverlappingAlongOneLineMakeNoLeafOfNoArea) {
   EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
 }
 
+// Two coplanar strips 53 wide and 1 600 long, a strip-width apart, in one group: one surface of two faces, rotated
+// and written with 17 digits (a reviewer's fuzzing). Their short ends lie on one line, bent 2e-13 by the rounding,
+// which left a sliver triangle of area 1.1e-11 between them whose centre rounded onto one of its vertices. Handed to
+// the mesher as a seed of the outside, that centre was located in a triangle of one strip, and the whole strip was
+// left out: the patches covered half of the surface. The outside triangles are now marked themselves.
+TEST(Hierarchy, TwoStripsOfOneSurfaceAreBothMeshed) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("aarad-two-strips-" + std::to_string(::getpid()) + ".obj");
+  {
+    std::ofstream obj(file);
+    obj << "v 1625.3843846217646 -637.27610794455927 3408.513421955281\n"
+           "v 1678.6279657700454 -659.68802344151652 3410.9880424762023\n"
+           "v 1731.8715469183253 -682.09993893847366 3413.4626629971244\n"
+           "v 1785.1151280666056 -704.51185443543079 3415.9372835180457\n"
+           "v 1267.3585993796169 -2016.8371065351803 2670.5660685011917\n"
+           "v 1214.1150182313365 -1994.4251910382231 2668.0914479802705\n"
+           "v 1160.8714370830564 -1972.0132755412662 2665.6168274593488\n"
+           "v 1107.6278559347759 -1949.6013600443089 2663.1422069384275\n"
+           "g strips\nf 4 3 6 5\nf 2 1 8 7\n";
+  }
+  const Scene scene = import_obj(file.string());
+  std::filesystem::remove(file);
+  ASSERT_EQ(scene.surfaces.size(), 1u);
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  double area = 0.0;
+  for (const NodeId patch : h.patches()) area += h.area(patch);
+  EXPECT_NEAR(area, scene.surfaces[0].area, 1e-9 * scene.surfaces[0].area);
+}
+
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
 // the plane, as two triangles, is meshed as the quad with its corners moved onto the surface's plane, so no
 // child leaves its parent's plane.
