@@ -33,6 +33,17 @@ namespace {
 
 using test::describe;
 
+// Imports an OBJ file's text through a file of its own in the temporary folder.
+Scene import_text(const std::string& name, const std::string& text) {
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()) + ".obj");
+  std::ofstream(file) << text;
+  Scene scene = import_obj(file.string());
+  std::filesystem::remove(file);
+  return scene;
+}
+
+
 MeshingOptions sizes(double patch, double element) {
   MeshingOptions o;
   o.patch_size = patch;
@@ -460,22 +471,16 @@ TEST(Hierarchy, RandomContactLinesKeepTheMeshSound) {
 // (found by fuzzing the importer), which the import splits into six triangles, each its own surface, cutting
 // through one another.
 TEST(Hierarchy, ContactLinesCrossingWhereAThirdEndsMakeNoLeafOfNoArea) {
-  const std::filesystem::path file = std::filesystem::temp_directory_path() /
-                                     ("aarad-crossing-contacts-" + std::to_string(::getpid()) + ".obj");
-  {
-    std::ofstream obj(file);
-    obj << "v 2.3175316529859593 1.174746712384037 3.8683167910547067\n"
-           "v 2.4511389079806754 2.0440799560441985 4.059127725961696\n"
-           "v 2.063316302725049 2.225253287615963 3.505259645296339\n"
-           "v 2.748861092019325 1.3559200439558015 2.740872274038304\n"
-           "v 2.882468347014041 2.225253287615963 2.931683208945293\n"
-           "v 3.2702909522696673 2.0440799560441985 3.4855512896106498\n"
-           "v 3.136683697274951 1.174746712384037 3.2947403547036607\n"
-           "v 1.929709047730333 1.3559200439558015 3.31444871038935\n"
-           "f 1 2 3 4\nf 8 6 7 5\nf 4 5 8 1\n";
-  }
-  const Scene scene = import_obj(file.string());
-  std::filesystem::remove(file);
+  const Scene scene = import_text("aarad-crossing-contacts",
+                                  "v 2.3175316529859593 1.174746712384037 3.8683167910547067\n"
+                                  "v 2.4511389079806754 2.0440799560441985 4.059127725961696\n"
+                                  "v 2.063316302725049 2.225253287615963 3.505259645296339\n"
+                                  "v 2.748861092019325 1.3559200439558015 2.740872274038304\n"
+                                  "v 2.882468347014041 2.225253287615963 2.931683208945293\n"
+                                  "v 3.2702909522696673 2.0440799560441985 3.4855512896106498\n"
+                                  "v 3.136683697274951 1.174746712384037 3.2947403547036607\n"
+                                  "v 1.929709047730333 1.3559200439558015 3.31444871038935\n"
+                                  "f 1 2 3 4\nf 8 6 7 5\nf 4 5 8 1\n");
   ASSERT_EQ(scene.surfaces.size(), 6u);
   const Hierarchy h(scene, MeshingOptions{});
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
@@ -494,16 +499,11 @@ TEST(Hierarchy, ContactLinesCrossingWhereAThirdEndsMakeNoLeafOfNoArea) {
 // start (a reviewer's fuzzing). Each was cut into element-sized pieces from its own first end, so their shared
 // piece got points an ulp apart: 8 nodes of no area, and the solve stopped with "receiver runs clockwise".
 TEST(Hierarchy, ContactLinesOverlappingAlongOneLineMakeNoLeafOfNoArea) {
-  const std::filesystem::path file = std::filesystem::temp_directory_path() /
-                                     ("aarad-overlapping-contacts-" + std::to_string(::getpid()) + ".obj");
-  {
-    std::ofstream obj(file);
-    obj << "v 0 0 5\nv 6 0 5\nv 6 0 0\nv 0 0 0\nv 2 4 2\nv 2 4 3\nv 4 4 2\nv 4 4 3\nv 3 0 4\nv 3 0.1 2\n"
-           "v 3 -0.1 2\nv 3 1 3\nv 2 1 2\nv 2 0 2\nv 3 0 3\nv 3 0 2\nv 4 0 3\n"
-           "g floor\nf 1 2 3 4\ng lamp\nf 5 7 8 6\ng tri\nf 10 9 11\ng wall\nf 14 16 17 15\n";
-  }
-  const Scene scene = import_obj(file.string());
-  std::filesystem::remove(file);
+  const Scene scene = import_text("aarad-overlapping-contacts",
+                                  "v 0 0 5\nv 6 0 5\nv 6 0 0\nv 0 0 0\nv 2 4 2\nv 2 4 3\nv 4 4 2\nv 4 4 3\n"
+                                  "v 3 0 4\nv 3 0.1 2\nv 3 -0.1 2\nv 3 1 3\nv 2 1 2\nv 2 0 2\nv 3 0 3\nv 3 0 2\n"
+                                  "v 4 0 3\ng floor\nf 1 2 3 4\ng lamp\nf 5 7 8 6\ng tri\nf 10 9 11\n"
+                                  "g wall\nf 14 16 17 15\n");
   const Hierarchy h(scene, MeshingOptions{});
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
   std::size_t flat = 0;
@@ -517,22 +517,16 @@ TEST(Hierarchy, ContactLinesOverlappingAlongOneLineMakeNoLeafOfNoArea) {
 // the mesher as a seed of the outside, that centre was located in a triangle of one strip, and the whole strip was
 // left out: the patches covered half of the surface. The outside triangles are now marked themselves.
 TEST(Hierarchy, TwoStripsOfOneSurfaceAreBothMeshed) {
-  const std::filesystem::path file = std::filesystem::temp_directory_path() /
-                                     ("aarad-two-strips-" + std::to_string(::getpid()) + ".obj");
-  {
-    std::ofstream obj(file);
-    obj << "v 1625.3843846217646 -637.27610794455927 3408.513421955281\n"
-           "v 1678.6279657700454 -659.68802344151652 3410.9880424762023\n"
-           "v 1731.8715469183253 -682.09993893847366 3413.4626629971244\n"
-           "v 1785.1151280666056 -704.51185443543079 3415.9372835180457\n"
-           "v 1267.3585993796169 -2016.8371065351803 2670.5660685011917\n"
-           "v 1214.1150182313365 -1994.4251910382231 2668.0914479802705\n"
-           "v 1160.8714370830564 -1972.0132755412662 2665.6168274593488\n"
-           "v 1107.6278559347759 -1949.6013600443089 2663.1422069384275\n"
-           "g strips\nf 4 3 6 5\nf 2 1 8 7\n";
-  }
-  const Scene scene = import_obj(file.string());
-  std::filesystem::remove(file);
+  const Scene scene = import_text("aarad-two-strips",
+                                  "v 1625.3843846217646 -637.27610794455927 3408.513421955281\n"
+                                  "v 1678.6279657700454 -659.68802344151652 3410.9880424762023\n"
+                                  "v 1731.8715469183253 -682.09993893847366 3413.4626629971244\n"
+                                  "v 1785.1151280666056 -704.51185443543079 3415.9372835180457\n"
+                                  "v 1267.3585993796169 -2016.8371065351803 2670.5660685011917\n"
+                                  "v 1214.1150182313365 -1994.4251910382231 2668.0914479802705\n"
+                                  "v 1160.8714370830564 -1972.0132755412662 2665.6168274593488\n"
+                                  "v 1107.6278559347759 -1949.6013600443089 2663.1422069384275\n"
+                                  "g strips\nf 4 3 6 5\nf 2 1 8 7\n");
   ASSERT_EQ(scene.surfaces.size(), 1u);
   const Hierarchy h(scene, MeshingOptions{});
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
