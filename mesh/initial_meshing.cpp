@@ -859,7 +859,7 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
       // The pieces go from `from` to `to` as before (the triangulation's insertion order).
       const bool forward = std::tie(from.x, from.y) < std::tie(to.x, to.y);
       const Vec2 low = forward ? from : to, high = forward ? to : from;
-      const auto point = [&](int part) {  // part k of `parts` from `from`
+      const auto point = [&](int part) {  // the end of piece `part` (1 .. parts) from `from`
         const int step = forward ? part : parts - part;
         return step == 0 ? low : step == parts ? high : low + (static_cast<double>(step) / parts) * (high - low);
       };

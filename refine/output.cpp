@@ -42,15 +42,16 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
     }
     if (std::any_of(values.begin(), values.end(), lit)) break;
   }
-  // The lit area, when it is at most 1 % of the area: then the 99th percentile is an unlit leaf's 0, which left
-  // exposure 1 and the images depending on Ke (a small card under a lamp on a black floor was dark at Ke 10 and
-  // white at Ke 1e4). The percentile is then the lit area's.
+  // The lit area, when it is at most 1 - kPercentile of the area: then the percentile is an unlit leaf's 0, which
+  // left exposure 1 and the images depending on Ke (a small card under a lamp on a black floor was dark at Ke 10
+  // and white at Ke 1e4). The percentile is then the lit area's.
+  constexpr double kPercentile = 0.99;
   double all = 0.0, lit_area = 0.0;
   for (std::size_t i = 0; i < values.size(); ++i) {
     all += areas[i];
     if (lit(values[i])) lit_area += areas[i];
   }
-  if (lit_area > 0.0 && lit_area <= 0.01 * all) {
+  if (lit_area > 0.0 && lit_area <= (1.0 - kPercentile) * all) {
     std::size_t kept = 0;
     for (std::size_t i = 0; i < values.size(); ++i) {
       if (!lit(values[i])) continue;
@@ -61,7 +62,7 @@ ToneMap solution_tone_map(const Solver& solver, std::span<const Rgb> displayed) 
     values.resize(kept);
     areas.resize(kept);
   }
-  return ToneMap::from_percentile(values, areas, 0.99);
+  return ToneMap::from_percentile(values, areas, kPercentile);
 }
 
 void check_output_directory(const std::filesystem::path& directory) {

@@ -42,6 +42,18 @@ class SceneImport : public ::testing::Test {
     return path.string();
   }
 
+  // Imports `# aarad KIND: WORDS` above one triangle: a comment that cannot be used, whose warning must name line 1
+  // and say `why`. Returns the scene.
+  Scene import_refused_comment(const std::string& kind, const std::string& words, const std::string& why) const {
+    const Scene scene = import_obj(write(kind + ".obj", "# aarad " + kind + ": " + words + "\n"
+                                                        "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"));
+    const std::string expected = kind + ".obj:1: " + kind + " comment not understood " + why + ", ignored";
+    const auto said = std::find_if(scene.warnings.begin(), scene.warnings.end(),
+                                   [&](const std::string& w) { return w.find(expected) != std::string::npos; });
+    EXPECT_NE(said, scene.warnings.end()) << words << ": " << (scene.warnings.empty() ? "" : scene.warnings.front());
+    return scene;
+  }
+
   // The InputError that importing `path` throws (fails the test when there is none).
   static InputError import_error(const std::string& path) {
     try {
@@ -1160,14 +1172,7 @@ TEST_F(SceneImport, import_meshing_comment_is_read_back_and_a_bad_one_warns) {
       {"size 1 2 3 4 5 6", "('size' is not one of its names)"},
       {"patch_size", "(patch_size has no number after it)"},
       {"", "(it gives no size)"}};
-  for (const auto& [words, why] : bad) {
-    const Scene s = import_obj(write("bad.obj", "# aarad meshing: " + words + "\n" + faces));
-    EXPECT_FALSE(s.meshing.has_value()) << words;
-    const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [&why](const std::string& w) {
-      return w.find("bad.obj:1: meshing comment not understood " + why + ", ignored") != std::string::npos;
-    });
-    EXPECT_NE(said, s.warnings.end()) << words << ": " << (s.warnings.empty() ? "" : s.warnings.front());
-  }
+  for (const auto& [words, why] : bad) EXPECT_FALSE(import_refused_comment("meshing", words, why).meshing) << words;
 }
 
 TEST_F(SceneImport, import_camera_comment_that_cannot_be_used_warns_and_says_why) {
@@ -1181,14 +1186,7 @@ TEST_F(SceneImport, import_camera_comment_that_cannot_be_used_warns_and_says_why
       {"eye nan 0 0 forward 0 0 1 up 0 1 0 vertical_fov 1", "('nan' is not a finite number)"},
       {"eye 0 0 0 forward 1e300 1e300 0 up 0 1 0 vertical_fov 1", "(forward is too long for a double)"},
       {"eye 0 0 0 forward 0 0 1 up 0 1 0", "(its words are not in the order below)"}};
-  for (const auto& [words, why] : bad) {
-    const Scene s = import_obj(write("cam.obj", "# aarad camera: " + words + "\n" + faces));
-    EXPECT_FALSE(s.camera.has_value()) << words;
-    const auto said = std::find_if(s.warnings.begin(), s.warnings.end(), [&why](const std::string& w) {
-      return w.find("cam.obj:1: camera comment not understood " + why + ", ignored") != std::string::npos;
-    });
-    EXPECT_NE(said, s.warnings.end()) << words << ": " << (s.warnings.empty() ? "" : s.warnings.front());
-  }
+  for (const auto& [words, why] : bad) EXPECT_FALSE(import_refused_comment("camera", words, why).camera) << words;
   // Short or long vectors that are not parallel are a camera: the test of parallel vectors is relative.
   const Scene tiny = import_obj(write("tiny.obj", "# aarad camera: eye 0 0 0 forward 0 0 1e-12 up 0 1e-12 1e-11 "
                                                   "vertical_fov 1\n" + faces));
