@@ -1,8 +1,10 @@
 // Error types. Input and command-line layers throw; kernels never do (they return status or check).
 #pragma once
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace aarad {
 
@@ -32,5 +34,24 @@ class InputError : public Error {
   int line_;
   std::string message_;
 };
+
+// `text` as a message may show it on a terminal: a control character (a NUL, an escape sequence, a line end) of a
+// name or a word read from a file is written as \xNN, so it neither cuts the message short (a NUL ended what())
+// nor acts on the terminal. Other bytes, UTF-8 among them, are kept.
+inline std::string printable(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte != 0x7F) {
+      out += c;
+    } else {
+      char escaped[5];
+      std::snprintf(escaped, sizeof escaped, "\\x%02X", byte);
+      out += escaped;
+    }
+  }
+  return out;
+}
 
 }  // namespace aarad

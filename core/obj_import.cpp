@@ -59,16 +59,19 @@ std::vector<std::string> split_tokens(const std::string& line) {
 // The text of an OBJ or MTL file as both readers here see it: without a UTF-8 byte-order mark (Notepad writes
 // one, and it would hide the first statement, often the mtllib or newmtl line), with old Mac line ends (CR
 // alone) read as line ends, and without a comment after a statement of numbers or file and material names
-// ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would read as part of it. Group and material
-// definitions keep a '#' ("o Chair #1", "newmtl Oak #2"); whole-line comments stay (the "# aarad" lines are
+// ("f 1 2 3 4 # lid": a '#' after a blank), which tinyobjloader would read as part of it. A material's name ends
+// there too, where it is defined and where it is used ("newmtl lamp # the light" defines "lamp", as "usemtl lamp #
+// the light" uses it; the whole line was the name, which no `usemtl` matched). Group names keep a '#' ("o Chair
+// #1"); whole-line comments stay (the "# aarad" lines are
 // read from them); every line keeps its number. `fo`, an older spelling of the face statement `f`, is read as `f`
 // (tinyobjloader passes over it, and its faces would vanish without a word). A statement whose line ends with a
 // backslash goes on on the next line (Wavefront's OBJ specification, appendix B1, "\" line continuation): it is
 // joined into one line under the number of its first, and an empty line stands in for each line joined to it, so
 // the lines after it keep their numbers. Comment lines are not continued.
 std::string clean_text(std::istream& in) {
-  static const std::set<std::string> kCommentAfter{"v",  "vt", "vn", "vp", "f",  "l",  "p", "s",  "mtllib", "usemtl",
-                                              "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni", "d", "Tr", "illum"};
+  static const std::set<std::string> kCommentAfter{"v",  "vt", "vn", "vp", "f", "l",  "p",  "s",     "mtllib",
+                                                   "usemtl", "newmtl", "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni",
+                                                   "d",  "Tr", "illum"};
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
   // Every line end is one LF: CR LF, and a CR alone also in a file of LF line ends, as tinyobjloader's reader
@@ -165,11 +168,12 @@ std::string trim(const std::string& s) {
 
 // A word of the file as a message shows it: whole up to 64 bytes, else its start (cut between UTF-8 characters) and
 // its length (a reviewer's coordinate of ten million digits made a 10 MB error line).
+// Control characters are escaped (printable()): a NUL byte in a coordinate cut the message off after it.
 std::string shown(const std::string& word) {
-  if (word.size() <= 64) return word;
+  if (word.size() <= 64) return printable(word);
   std::size_t end = 48;
   while (end > 0 && (static_cast<unsigned char>(word[end]) & 0xC0) == 0x80) --end;  // not inside a UTF-8 character
-  return word.substr(0, end) + "... (" + std::to_string(word.size()) + " bytes)";
+  return printable(word.substr(0, end)) + "... (" + std::to_string(word.size()) + " bytes)";
 }
 
 // strtod over a whole token: nullopt when the token is not a number. NaN and infinity parse (and are
@@ -455,6 +459,7 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
     } else if (key == "#" && t.size() > 2 && t[1] == "aarad" && t[2] == "meshing:") {
       std::string problem;
       text.meshing = parse_meshing_comment(std::vector<std::string>(t.begin() + 3, t.end()), problem);
+      if (text.meshing) text.meshing->source_line = number;
       if (!text.meshing)
         warnings.push_back(InputError::format(path, number, "meshing comment not understood (" + problem + "), "
                                                             "ignored; write '# aarad "
@@ -516,8 +521,13 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
     const std::vector<std::string> t = split_tokens(line);
     if (t.empty()) continue;
     if (t[0] == "newmtl") {
-      // The rest of the line, as tinyobjloader names it (usemtl takes one word: import_obj warns there).
+      // The rest of the line, as tinyobjloader names it. `usemtl` takes one word (read_obj_text warns of more), so a
+      // name of several words can be defined but never used: said here, where it is defined.
       const std::string name = trim(line.substr(line.find("newmtl") + 6));
+      if (split_tokens(name).size() > 1)
+        warnings.push_back(InputError::format(path, number, "material name '" + shown(name) + "' has blanks in it; "
+                                                            "'usemtl' takes one word, so no face can use this "
+                                                            "material. Write its name without blanks"));
       // The first definition of a name wins, as in tinyobjloader's material map.
       const auto [it, inserted] = entries.try_emplace(name);
       current = inserted ? &it->second : nullptr;
@@ -542,7 +552,7 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
 Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* entry, const std::string& obj_path,
                           std::vector<std::string>& warnings) {
   Material m;
-  m.name = parsed.name;
+  m.name = printable(parsed.name);
   const std::string file = entry ? entry->file : obj_path;
   if (entry && entry->kd) {
     m.reflectance = *entry->kd;
@@ -596,12 +606,14 @@ std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const
       return skip("face too small for double precision (its size " + number_text(check.size) + " is below 1e-50, "
                   "where the solver's products of lengths underflow) skipped; scale the scene up");
     case FaceProblem::kCollinear:
-      return skip("face of zero area (all its vertices on one line) skipped; remove it or fix its vertices");
+      return skip("face of zero area or too thin to resolve skipped: its vertices lie on one line to within 1e-12 of "
+                  "its size (" + number_text(check.size) + "); remove it or fix its vertices");
     case FaceProblem::kSelfIntersecting:
       throw InputError(path, line, "face intersects itself (two of its edges cross or touch); list its vertices in "
                                    "order around its boundary, or split it into simple polygons");
     case FaceProblem::kZeroArea:
-      return skip("face of zero area skipped; remove it or fix its vertices");
+      return skip("face of zero area skipped: its boundary encloses less than 1e-12 of its size squared; remove it or "
+                  "fix its vertices");
   }
   const std::vector<Vec3>& v = check.vertices;
   if (check.planar()) return {v};
@@ -732,8 +744,10 @@ Scene import_obj(const std::string& obj_path) {
   // material in a second library on one line, got the default material without a word, since the check above
   // finds the name defined. It gets every library, each on a line of its own, before the first statement, and the
   // file's own `mtllib` lines are left out (the faces are matched to their lines by order, not by tinyobjloader's
-  // line numbers). So are points and lines (`p`, `l`), which aarad does not use: tinyobjloader refused a bad one
-  // ("p 0") with a message naming a line shifted by the libraries above, and no line of the file.
+  // line numbers). So is every statement aarad does not read (points and lines, `p` and `l`; vertex weights, `vw`;
+  // tags, `t`; free-form geometry): tinyobjloader refused a bad one ("p 0", "vw 1 -1 0.5") with a message naming a
+  // line shifted by the libraries above, where read_obj_text has warned that it is passed over.
+  static const std::set<std::string> kParsed{"v", "vt", "vn", "f", "o", "g", "s", "usemtl"};
   std::string parsed_text = library_statements;
   parsed_text.reserve(library_statements.size() + cleaned.size());
   {
@@ -741,7 +755,7 @@ Scene import_obj(const std::string& obj_path) {
     std::string line;
     while (std::getline(lines, line)) {
       const std::vector<std::string> t = split_tokens(line);
-      if (t.empty() || (t[0] != "mtllib" && t[0] != "p" && t[0] != "l")) parsed_text += line;
+      if (!t.empty() && kParsed.contains(t[0])) parsed_text += line;
       parsed_text += '\n';
     }
   }
@@ -758,12 +772,17 @@ Scene import_obj(const std::string& obj_path) {
   // tinyobjloader also hands back a material without a name for an MTL file with no newmtl line (empty, or not an
   // MTL file at all): it defines nothing, and a face that names no material gets the default one.
   constexpr std::uint32_t kNoMaterial = std::numeric_limits<std::uint32_t>::max();
+  // A name defined again is one material, the first definition's (read_mtl_text warns of the others): the others
+  // were listed among the scene's materials with the first one's values, though no face can use them.
   std::vector<std::uint32_t> material_index(parsed_materials.size(), kNoMaterial);
+  std::map<std::string, std::uint32_t> material_by_name;
   for (std::size_t i = 0; i < parsed_materials.size(); ++i) {
     const auto found = mtl_entries.find(parsed_materials[i].name);
     const MtlEntry* entry = found != mtl_entries.end() ? &found->second : nullptr;
     if (parsed_materials[i].name.empty() && entry == nullptr) continue;
-    material_index[i] = scene.add_material(checked_material(parsed_materials[i], entry, obj_path, warnings));
+    const auto [named, first] = material_by_name.try_emplace(parsed_materials[i].name);
+    if (first) named->second = scene.add_material(checked_material(parsed_materials[i], entry, obj_path, warnings));
+    material_index[i] = named->second;
   }
   std::optional<std::uint32_t> default_material;
 
@@ -847,7 +866,7 @@ Scene import_obj(const std::string& obj_path) {
   std::unordered_set<std::size_t, decltype(face_hash), decltype(same_face)> kept_faces(0, face_hash, same_face);
   for (std::size_t shape_index = 0; shape_index < shapes.size(); ++shape_index) {
     const auto& shape = shapes[shape_index];
-    std::string group_name = trim(shape.name);
+    std::string group_name = printable(trim(shape.name));
     if (group_name.empty()) group_name = stem.empty() ? std::string("default") : stem;
     const std::uint32_t group_number =
         group_numbers.try_emplace(group_name, static_cast<std::uint32_t>(group_numbers.size())).first->second;
@@ -934,7 +953,8 @@ Scene import_obj(const std::string& obj_path) {
     }
     std::optional<std::uint32_t>& group = groups[k.shape];
     if (!group) {
-      const std::string name = trim(shapes[k.shape].name);
+      // A control character of a name (an escape sequence) is shown as \xNN wherever the name is printed.
+      const std::string name = printable(trim(shapes[k.shape].name));
       group = scene.add_group(!name.empty() ? name : stem.empty() ? std::string("default") : stem);
     }
     scene.add_face(*group, k.material, std::move(k.polygon), k.line, k.smoothing);

@@ -160,13 +160,20 @@ void Scene::validate() const {
   const double smallest = kSmallestFace * diagonal();
   for (std::size_t fi = 0; fi < faces.size(); ++fi) {
     const Face& f = faces[fi];
-    if (f.vertices.size() < 3) throw InputError(where, f.source_line, "a face has fewer than three vertices");
-    for (const Vec3& v : f.vertices)
-      if (!finite(v)) throw InputError(where, f.source_line, "a face has a vertex that is not finite");
-    if (f.material >= materials.size() || f.group >= groups.size() || f.surface >= surfaces.size())
-      throw Error(where + ": a face refers to a material, group or surface that does not exist");
-    // The importer's checks (core/face_check.h): the initial meshing would crash on such a face.
+    if (f.group >= groups.size())
+      throw InputError(where, f.source_line, "face " + std::to_string(fi) + " refers to group " +
+                                                 std::to_string(f.group) + ", which does not exist");
     const std::string face = "face " + std::to_string(fi) + " (group '" + groups[f.group].name + "')";
+    if (f.material >= materials.size())
+      throw InputError(where, f.source_line, face + " refers to material " + std::to_string(f.material) +
+                                                 ", which does not exist");
+    if (f.surface >= surfaces.size())
+      throw InputError(where, f.source_line, face + " refers to physical surface " + std::to_string(f.surface) +
+                                                 ", which does not exist; call Scene::build_surfaces()");
+    if (f.vertices.size() < 3) throw InputError(where, f.source_line, face + " has fewer than three vertices");
+    for (const Vec3& v : f.vertices)
+      if (!finite(v)) throw InputError(where, f.source_line, face + " has a vertex that is not finite");
+    // The importer's checks (core/face_check.h): the initial meshing would crash on such a face.
     switch (check_face(f.vertices).problem) {
       case FaceProblem::kNone:
         break;
@@ -181,14 +188,16 @@ void Scene::validate() const {
                                                       "1e-50, where the solver's products of lengths underflow); "
                                                       "scale the scene up");
       case FaceProblem::kCollinear:
-        throw InputError(where, f.source_line, face + " has zero area (all its vertices on one line); remove it or "
-                                                      "fix its vertices");
+        throw InputError(where, f.source_line, face + " has zero area or is too thin to resolve: its vertices lie "
+                                                      "on one line to within 1e-12 of its size; remove it or fix its "
+                                                      "vertices");
       case FaceProblem::kSelfIntersecting:
         throw InputError(where, f.source_line, face + " intersects itself (two of its edges cross or touch); list "
                                                       "its vertices in order around its boundary, or split it into "
                                                       "simple polygons");
       case FaceProblem::kZeroArea:
-        throw InputError(where, f.source_line, face + " has zero area; remove it or fix its vertices");
+        throw InputError(where, f.source_line, face + " has zero area: its boundary encloses less than 1e-12 of "
+                                                      "its size squared; remove it or fix its vertices");
     }
     // Below what the initial meshing resolves, which welds vertices closer than kPlaneDistance of the diagonal:
     // such a face would collapse there (CGAL's mesher crashed on one; the importer skips them).

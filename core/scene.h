@@ -81,6 +81,7 @@ struct MeshingHint {
   double patch_size = 0.0;    // longest patch edge
   double element_size = 0.0;  // longest initial element edge
   double min_area = 0.0;      // smallest element a split may create
+  int source_line = 0;        // of the OBJ file's "# aarad meshing:" comment (0: not from a file)
 };
 
 class Scene {

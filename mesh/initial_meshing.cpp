@@ -82,6 +82,7 @@ struct Budget {
   double remaining = 0.0;
   double limit = 0.0;     // of the whole scene
   double diagonal = 0.0;  // the scene's
+  double patch_size = 0.0, element_size = 0.0;
 
   void check(double count, const char* items, const char* option, double size) const {
     if (count <= remaining) return;
@@ -92,11 +93,23 @@ struct Budget {
     } else {
       std::snprintf(counted, sizeof counted, "more than %.3g", std::numeric_limits<double>::max());
     }
-    char text[400];
-    std::snprintf(text, sizeof text,
-                  "meshing: with %s %g the surface of group '%s' makes %s initial %s, and the scene more than "
-                  "the limit of %.3g (MeshingOptions::max_initial_elements); choose a larger %s",
-                  option, size, scene.groups[surface.group].name.c_str(), counted, items, limit, option);
+    char text[600];
+    const double before = limit - remaining;  // the initial elements of the surfaces meshed before this one
+    if (count <= limit && before > 0.0) {
+      // This surface alone would fit: the surfaces before it took the budget, by both sizes, and the size this
+      // check is about is not the one to blame (a reviewer's floor of tiny elements made a wall's patches fail).
+      std::snprintf(text, sizeof text,
+                    "meshing: with patch size %g and element size %g the surfaces meshed before group '%s' make "
+                    "%.3g initial elements, and with its %s initial %s the scene makes more than the limit of "
+                    "%.3g (MeshingOptions::max_initial_elements); choose a larger element size or patch size",
+                    patch_size, element_size, scene.groups[surface.group].name.c_str(), before, counted, items,
+                    limit);
+    } else {
+      std::snprintf(text, sizeof text,
+                    "meshing: with %s %g the surface of group '%s' makes %s initial %s, and the scene more than "
+                    "the limit of %.3g (MeshingOptions::max_initial_elements); choose a larger %s",
+                    option, size, scene.groups[surface.group].name.c_str(), counted, items, limit, option);
+    }
     throw Error(text);
   }
 };
@@ -993,7 +1006,7 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
                             double max_elements, double scene_limit, double diagonal,
                             std::span<const ContactSegment> contacts) {
   const Surface& surface = scene.surfaces.at(surface_id);
-  const Budget budget{scene, surface, max_elements, scene_limit, diagonal};
+  const Budget budget{scene, surface, max_elements, scene_limit, diagonal, patch_size, element_size};
   const std::vector<Vec3>& first = scene.faces[surface.faces.front()].vertices;
   const Frame frame = frame_of(surface.plane, first.front());
   std::optional<std::vector<Vec3>> outline =

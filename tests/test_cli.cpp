@@ -284,6 +284,25 @@ TEST(Cli, SolveRefusesTooFineMeshingAnUnwritableOutputAndADarkSceneBeforeSolving
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("with element size 0.01 the surface of group"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "fine"));
+  // Two unit squares, each of 1.56e6 elements of size 8e-4, by the scene's own comment: the second square alone
+  // fits the limit of 2e6, so the error blames the surfaces before it and both sizes (it blamed the second's patch
+  // or element size, as if it alone were too fine), and names the comment the sizes came from.
+  write_file("two_fine.mtl", "newmtl lamp\nKd 0.5\nKe 1\n");
+  const fs::path fine = write_file("two_fine.obj", "mtllib two_fine.mtl\n# aarad meshing: patch_size 0.5 "
+                                                   "element_size 8e-4\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
+                                                   "v 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                                   "o a\nf 1 2 3 4\no b\nf 5 8 7 6\n");
+  r = aarad("solve " + fine.string() + " --out " + (dir / "two_fine").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("with patch size 0.5 and element size 0.0008 the surfaces meshed before group 'b' make "
+                       "1.56e+06 initial elements, and with its 1.56e+06 initial elements the scene makes more than "
+                       "the limit of 2e+06"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("(the sizes are those of the '# aarad meshing:' comment at " + fine.string() + ":2;"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "two_fine"));
   // An output path below a regular file.
   const fs::path file = write_file("a_file", "x");
   r = aarad("solve office --out " + (file / "out").string());

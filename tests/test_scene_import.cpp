@@ -243,6 +243,24 @@ TEST_F(SceneImport, import_material_names_after_several_blanks_are_found) {
   EXPECT_EQ(scene.materials[scene.faces[1].material].emission, Rgb(4.0));
 }
 
+// A comment after `newmtl` ends the name, as it ends it after `usemtl`: "newmtl lamp   # the ceiling light" defined a
+// material named by the whole line, the faces of "usemtl lamp" got the default material and the lamp's emission was
+// lost, under a warning that 'lamp' was not defined. A name of several words is defined but can never be used:
+// said where it is defined.
+TEST_F(SceneImport, import_material_name_ends_at_a_comment_and_a_name_of_words_warns) {
+  write("m.mtl", "newmtl grey # walls\nKd 0.5 0.5 0.5\nnewmtl lamp   # the ceiling light\nKd 0.2 0.2 0.2\n"
+                 "Ke 4 4 4\nnewmtl red paint\nKd 0.7 0.1 0.1\n");
+  const Scene scene = import_obj(write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\n"
+                                                "v 1 1 1\nusemtl grey\nf 1 2 3\nusemtl lamp # on\nf 4 6 5\n"));
+  ASSERT_EQ(scene.faces.size(), 2u);
+  EXPECT_EQ(scene.materials[scene.faces[0].material].name, "grey");
+  EXPECT_EQ(scene.materials[scene.faces[1].material].name, "lamp");
+  EXPECT_EQ(scene.materials[scene.faces[1].material].emission, Rgb(4.0));
+  ASSERT_EQ(scene.warnings.size(), 1u) << scene.warnings.front();
+  EXPECT_NE(scene.warnings[0].find("m.mtl:6: material name 'red paint' has blanks in it"), std::string::npos)
+      << scene.warnings[0];
+}
+
 // ---- Errors with lines ---------------------------------------------------------------------------------
 
 TEST_F(SceneImport, import_nan_coordinate_is_error_with_line) {
@@ -286,6 +304,23 @@ TEST_F(SceneImport, import_coordinate_with_a_nul_byte_is_error_with_line) {
   const InputError e = import_error(write("nul.obj", std::string(text, sizeof text - 1)));
   EXPECT_EQ(e.line(), 2);
   EXPECT_NE(e.message().find("is not a number"), std::string::npos) << e.message();
+  // The word is shown with its NUL escaped: printed, the raw NUL cut the message off after "'1" (what() is a C
+  // string), reason and fix lost.
+  EXPECT_NE(std::string(e.what()).find("vertex coordinate '1\\x00garbage' is not a number"), std::string::npos)
+      << e.what();
+}
+
+// A control character in a group's or a material's name (an escape sequence) is kept as \xNN text: printed raw,
+// it acted on the terminal `aarad inspect` wrote to.
+TEST_F(SceneImport, import_control_characters_of_names_are_escaped) {
+  write("c.mtl", "newmtl l\x1B[2Jamp\nKd 0.2 0.2 0.2\nKe 4 4 4\n");
+  const Scene scene = import_obj(write("c.obj", "mtllib c.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
+                                                "o a\x1B[2J\x07" "b\nusemtl l\x1B[2Jamp\nf 1 2 3\n"));
+  ASSERT_EQ(scene.groups.size(), 1u);
+  EXPECT_EQ(scene.groups[0].name, "a\\x1B[2J\\x07b");
+  EXPECT_EQ(scene.materials[scene.faces[0].material].name, "l\\x1B[2Jamp");
+  EXPECT_EQ(scene.materials[scene.faces[0].material].emission, Rgb(4.0));  // found by its name in the file
+  EXPECT_EQ(printable(std::string("a\0b\x7F\xC3\xA9\t", 7)), "a\\x00b\\x7F\xC3\xA9\\x09");  // UTF-8 kept
 }
 
 // Points and lines have no area: aarad passes over them, good or bad. A bad one ("p 0") was refused by
@@ -300,6 +335,20 @@ TEST_F(SceneImport, import_passes_over_points_and_lines) {
     EXPECT_EQ(scene.faces.size(), 1u) << statements;
     EXPECT_EQ(scene.materials[scene.faces[0].material].name, "grey") << statements;
   }
+}
+
+// Statements aarad does not read are warned about and passed over, whatever their values: tinyobjloader's vertex
+// weights (`vw`) and tags (`t`) stopped the import when bad ("vw 1 -1 0.5": "joint_id is negative"), with a line
+// shifted by the material libraries and no file:line form.
+TEST_F(SceneImport, import_passes_over_statements_it_does_not_read) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("vw.obj", "mtllib s.mtl\nmtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                          "vw 1 -1 0.5\nt crease 0/1 1 2\nusemtl grey\nf 1 2 3 4\n");
+  const Scene scene = import_obj(obj);
+  ASSERT_EQ(scene.faces.size(), 1u);
+  EXPECT_EQ(scene.materials[scene.faces[0].material].name, "grey");
+  EXPECT_TRUE(has_warning(scene, "vw.obj:7: 'vw' is not an OBJ statement"));
+  EXPECT_TRUE(has_warning(scene, "vw.obj:8: 't' is not an OBJ statement"));
 }
 
 TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
@@ -988,6 +1037,17 @@ TEST_F(SceneImport, import_lines_ending_in_a_backslash_continue_on_the_next) {
   EXPECT_NE(e.message().find("vertex index out of range"), std::string::npos) << e.what();
 }
 
+// A triangle 1e13 long and 1 wide is thinner than the 1e-12 of its size the checks resolve: skipped, and the warning
+// says so (it said "all its vertices on one line", which they are not).
+TEST_F(SceneImport, import_face_too_thin_to_resolve_says_so) {
+  const Scene scene = import_obj(write("thin.obj", "v 0 0 0\nv 1e9 0 0\nv 1e9 1e9 0\nv 0 0 1e13\nv 0 1 0\n"
+                                                   "f 1 2 3\nf 1 4 5\n"));
+  EXPECT_EQ(scene.faces.size(), 1u);
+  EXPECT_TRUE(has_warning(scene, "thin.obj:7: face of zero area or too thin to resolve skipped: its vertices lie on "
+                                 "one line to within 1e-12 of its size (1e+13)"))
+      << scene.warnings.front();
+}
+
 // A face written twice counts once (its area, a lamp's flux), with a warning naming both lines; the same
 // vertices the other way round are the back of a two-sided panel and stay. A material defined twice warns too.
 TEST_F(SceneImport, import_repeated_faces_are_skipped_and_repeated_materials_warn) {
@@ -1008,6 +1068,8 @@ TEST_F(SceneImport, import_repeated_faces_are_skipped_and_repeated_materials_war
       << scene.warnings[1];
   const Surface& light = scene.surfaces[scene.groups[*scene.find_group("light")].surfaces[0]];
   EXPECT_EQ(scene.materials[light.material].emission, Rgb(4.0));  // the first definition
+  // The ignored definition is no material of the scene (it was listed as a third, with the first one's values).
+  EXPECT_EQ(scene.materials.size(), 2u);
 
   // The same polygon in another group or with another material is another object: kept.
   const Scene two = import_obj(write("shade.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
@@ -1320,10 +1382,14 @@ TEST(SceneModel, scene_validate_rejects_zero_area_and_self_intersecting_faces) {
     return std::string("no InputError");
   };
   const std::string collinear = message(scene_with({{0, 0, 0}, {0.5, 0, 0.5}, {1, 0, 1}}));
-  EXPECT_NE(collinear.find("face 1 (group 'floor') has zero area (all its vertices on one line)"), std::string::npos)
+  EXPECT_NE(collinear.find("face 1 (group 'floor') has zero area or is too thin to resolve: its vertices lie on one "
+                           "line"),
+            std::string::npos)
       << collinear;
   const std::string bowtie = message(scene_with({{0, 0, 0}, {1, 0, 1}, {1, 0, 0}, {0, 0, 1}}));
   EXPECT_NE(bowtie.find("face 1 (group 'floor') intersects itself"), std::string::npos) << bowtie;
+  const std::string not_finite = message(scene_with({{0, 0, 0}, {1, 0, std::nan("")}, {1, 0, 1}}));
+  EXPECT_NE(not_finite.find("face 1 (group 'floor') has a vertex that is not finite"), std::string::npos) << not_finite;
   const std::string two = message(scene_with({{0, 0, 0}, {1, 0, 0}, {0, 0, 0}}));
   EXPECT_NE(two.find("face 1 (group 'floor') has fewer than three distinct vertices"), std::string::npos) << two;
   // A repeated vertex is dropped as the importer drops it, and the square is fine.

@@ -91,8 +91,8 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
   });
   if (!on_a_face) {
     std::fprintf(stderr,
-                 "aarad: warning: the centroid of group '%s' lies outside its faces (the group is concave); the form "
-                 "factors are from that point, in the group's plane\n",
+                 "aarad: warning: the centroid of group '%s' lies outside its faces (the group is concave or in "
+                 "pieces); the form factors are from that point, in the group's plane\n",
                  group.name.c_str());
   }
   return formfactor::Shooter::from_normal(point, n);
@@ -100,7 +100,7 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
 
 void run_formfactors(const FormFactorsOptions& options) {
   const Scene scene = load_scene(options.scene);
-  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", warning.c_str());
+  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", printable(warning).c_str());
   const std::optional<std::uint32_t> from = scene.find_group(options.from);
   if (!from) {
     std::string known;

@@ -142,7 +142,7 @@ void print_table(const Scene& scene, bool builtin) {
   std::printf("  total emitted flux %s\n", rgb_text(flux).c_str());
 
   std::printf("\nwarnings (%zu)\n", scene.warnings.size());
-  for (const std::string& w : scene.warnings) std::printf("  %s\n", w.c_str());
+  for (const std::string& w : scene.warnings) std::printf("  %s\n", printable(w).c_str());
 }
 
 }  // namespace

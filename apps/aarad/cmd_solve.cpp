@@ -29,6 +29,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <unistd.h>
 #include <vector>
 
@@ -228,7 +229,7 @@ void run_solve(SolveCommandOptions options) {
   const Scene scene = load_scene(options.scene);
   // Warnings are problems the user must see: they go to stderr even with --quiet, which silences only the
   // progress and the summary.
-  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", warning.c_str());
+  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", printable(warning).c_str());
   refine::SolverOptions solver_options = options.solver;
   solver_options.meshing = refine::default_meshing(scene);
   // A scene's sizes were chosen together: a patch or element size on the command line replaces all three, and
@@ -250,7 +251,18 @@ void run_solve(SolveCommandOptions options) {
   while (!out.has_filename() && out.has_relative_path()) out = out.parent_path();
   refine::check_output_directory(out);  // now, not after the solve
 
-  refine::Solver solver(scene, solver_options);
+  // A mesh too large for its sizes: when they are the scene's own, the error says where they were written.
+  std::optional<refine::Solver> made;
+  try {
+    made.emplace(scene, solver_options);
+  } catch (const Error& e) {
+    const bool from_comment =
+        scene.meshing && scene.meshing->source_line > 0 && !options.patch_size && !options.element_size;
+    if (!from_comment || !std::string_view(e.what()).starts_with("meshing:")) throw;
+    throw Error(std::string(e.what()) + " (the sizes are those of the '# aarad meshing:' comment at " + scene.name +
+                ":" + std::to_string(scene.meshing->source_line) + "; --patch-size and --element-size replace them)");
+  }
+  refine::Solver& solver = *made;
   if (!(solver.emitted_flux().sum() > 0.0)) {
     const bool lit = std::any_of(scene.faces.begin(), scene.faces.end(),
                                  [&](const Face& f) { return scene.materials[f.material].emits(); });

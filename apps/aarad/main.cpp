@@ -79,7 +79,7 @@ int run(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   } catch (const aarad::Error& e) {
-    std::fprintf(stderr, "aarad: error: %s\n", e.what());
+    std::fprintf(stderr, "aarad: error: %s\n", aarad::printable(e.what()).c_str());
     return 1;
   } catch (const std::bad_alloc&) {
     // Out of memory is an internal error too (exit code 3), said in words.
