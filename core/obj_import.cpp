@@ -516,11 +516,21 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
   std::string line;
   int number = 0;
   MtlEntry* current = nullptr;
+  bool defines = false;       // a `newmtl` line seen
+  std::size_t statements = 0;  // lines that are not blank or comments
   while (std::getline(in, line)) {
     ++number;
     const std::vector<std::string> t = split_tokens(line);
-    if (t.empty()) continue;
+    if (t.empty() || t[0].starts_with('#')) continue;
+    ++statements;
+    if (!defines && t[0] != "newmtl" && (t[0] == "Kd" || t[0] == "Ke")) {
+      // A colour before the first material belongs to none (a `newmtl` line lost or misspelt).
+      warnings.push_back(InputError::format(path, number, "'" + t[0] + "' before the first 'newmtl' belongs to no "
+                                                          "material and is ignored; start the material with "
+                                                          "'newmtl NAME' above it"));
+    }
     if (t[0] == "newmtl") {
+      defines = true;
       // The rest of the line, as tinyobjloader names it. `usemtl` takes one word (read_obj_text warns of more), so a
       // name of several words can be defined but never used: said here, where it is defined.
       const std::string name = trim(line.substr(line.find("newmtl") + 6));
@@ -547,6 +557,12 @@ void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& ent
       current->ke_line = number;
     }
   }
+  // Text without one `newmtl` is not a material library (a wrong file named by `mtllib`, or a damaged one): said
+  // here, where the cause is, besides the warnings of the materials it was meant to define.
+  if (!defines && statements > 0)
+    warnings.push_back(InputError::format(path, 0, "defines no material (no 'newmtl' line in " +
+                                                       std::to_string(statements) + " statements); is it an MTL "
+                                                       "file?"));
 }
 
 Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* entry, const std::string& obj_path,

@@ -261,6 +261,18 @@ TEST_F(SceneImport, import_material_name_ends_at_a_comment_and_a_name_of_words_w
       << scene.warnings[0];
 }
 
+// A colour before the first `newmtl` belongs to no material, and a file without a `newmtl` is no material library:
+// both were passed over in silence (a misspelt "newmt lamp", an `mtllib` naming the wrong file).
+TEST_F(SceneImport, import_warns_of_colours_before_any_material_and_of_a_library_that_defines_none) {
+  write("first.mtl", "# materials\nKd 0.2 0.2 0.2\nnewmtl grey\nKd 0.5 0.5 0.5\n");
+  write("junk.mtl", "x 1 2\n\x01\x02\x03\nnot a material\n");
+  const Scene scene = import_obj(write("m.obj", "mtllib first.mtl junk.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
+                                                "usemtl grey\nf 1 2 3\n"));
+  EXPECT_TRUE(has_warning(scene, "first.mtl:2: 'Kd' before the first 'newmtl' belongs to no material"));
+  EXPECT_TRUE(has_warning(scene, "junk.mtl: defines no material (no 'newmtl' line in 3 statements)"));
+  EXPECT_EQ(scene.materials[scene.faces[0].material].reflectance, Rgb(0.5));
+}
+
 // ---- Errors with lines ---------------------------------------------------------------------------------
 
 TEST_F(SceneImport, import_nan_coordinate_is_error_with_line) {
