@@ -846,6 +846,16 @@ void cut_along_contacts(SurfaceMeshing& out, const Frame& frame, const Plane& pl
       if (glm::length(x - a) <= weld || glm::length(x - b) <= weld || glm::length(x - s.a) <= weld ||
           glm::length(x - s.b) <= weld)
         continue;  // at a point already taken
+      // A point the piece already stops at within `weld` of the crossing (another segment's crossing or end) is
+      // the crossing: segments that overlap along one line (two surfaces standing on one line from either side)
+      // cross a piece at one place, but each computed it from its own ends, a few ulps apart, and both points went
+      // on the piece; far from the origin they are one 3D point, and the triangle between them had no area.
+      const auto taken = std::find_if(piece.stops.begin(), piece.stops.end(),
+                                      [&](const auto& stop) { return glm::length(stop.second - x) <= weld; });
+      if (taken != piece.stops.end()) {
+        stops.emplace_back(glm::dot(taken->second - s.a, d) / glm::dot(d, d), taken->second);
+        continue;
+      }
       piece.stops.emplace_back(u, x);
       stops.emplace_back(t, x);
     }

@@ -511,6 +511,32 @@ TEST(Hierarchy, ContactLinesOverlappingAlongOneLineMakeNoLeafOfNoArea) {
   EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
 }
 
+// A floor, a wall and a ramp whose feet overlap along one line that crosses the floor's edge, turned and moved
+// 330 000 units from the origin, written with 17 digits (a fuzzer's far room: boxes side by side on a tiled floor).
+// Each foot crossed the floor's outline edge at a point computed from its own ends, a few ulps from the other's,
+// and both points went on the edge; there they are one 3D point, and the triangle between them, and the pieces of
+// the feet cut from them, had no area (14 leaves). A crossing within the weld of a point the edge already stops at
+// is now that point.
+TEST(Hierarchy, ContactLinesOverlappingAcrossTheOutlineFarFromTheOriginMakeNoLeafOfNoArea) {
+  const Scene scene = import_text("aarad-far-overlapping-feet",
+                                  "v 331041.15093335364 331254.00526821398 325651.97655170289\n"
+                                  "v 331044.29535782849 331251.38153590576 325656.36159714125\n"
+                                  "v 331042.34481043689 331254.57930877234 325659.67363783647\n"
+                                  "v 331039.20038596197 331257.20304108056 325655.28859239811\n"
+                                  "v 331039.45653417282 331256.36122065195 325653.23293521366\n"
+                                  "v 331041.55281715607 331254.6120657798 325656.1562988392\n"
+                                  "v 331039.74759941443 331254.85438652372 325654.85919839499\n"
+                                  "v 331041.02874641027 331255.04935449787 325655.42545793281\n"
+                                  "v 331039.71856954572 331256.14257629297 325653.59835566685\n"
+                                  "v 331040.13770889281 331254.21483195038 325654.1967902559\n"
+                                  "g floor\nf 1 2 3 4\ng wall\nf 5 6 7\ng ramp\nf 8 9 10\n");
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  std::size_t flat = 0;
+  for (NodeId node = 0; node < h.node_count(); ++node) flat += !(h.area(node) > 0.0);
+  EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
+}
+
 // Two coplanar strips 53 wide and 1 600 long, a strip-width apart, in one group: one surface of two faces, rotated
 // and written with 17 digits (a reviewer's fuzzing). Their short ends lie on one line, bent 2e-13 by the rounding,
 // which left a sliver triangle of area 1.1e-11 between them whose centre rounded onto one of its vertices. Handed to
