@@ -38,6 +38,7 @@ struct PlaneOrder {
   detail::OrderBuffers* buffers = nullptr;
   std::size_t height = 1;  // pixels per column (the arena's pixel p is column p / height, row p % height)
   std::size_t pixel = 0;
+  KeyRounding rounding;  // the scene's rounding in this task's keys (coverage_list.h)
 
   PlaneOrder at(std::size_t p) const {
     PlaneOrder bound = *this;
@@ -312,6 +313,10 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
     task_entries_[static_cast<std::size_t>(task)] = 0;
     return;
   }
+  // The scene's rounding, kPlaneDistance x the receivers' diagonal (Scene's coplanarity), in this shot's keys
+  // (coverage_list.h, KeyRounding).
+  const double delta = kPlaneDistance * prepared_.diagonal() / key_scale;
+  const KeyRounding rounding{2.0 * delta};
   b.arena.reset(width, height);
   b.arena.describe_receivers(receivers.size());
 
@@ -397,7 +402,7 @@ void AaHemicubeBackend::shoot_task(int task, const ReceiverView& receivers, std:
         }
       },
       PlaneOrder<decltype(project), decltype(depth_of)>{receivers, eye_, &project, &depth_of, &b.order,
-                                                        column_height});
+                                                        column_height, 0, rounding});
   if (!sums.empty()) sums[run_receiver] += run_sum;
 }
 

@@ -81,6 +81,30 @@ inline constexpr double kLayerTouch = kPlaneDistance;
 // their junction equal spreads too (a ceiling and a wall at a corner), which must not make them one plane.
 inline constexpr double kSamePlaneKeys = 1e-9;
 
+// The rounding of the scene's coordinates in the keys of one shot (see "Layers"). Scene takes faces whose vertices lie
+// within delta = kPlaneDistance x its diagonal of one plane as coplanar: two surfaces of one plane, fitted apart, may
+// lie up to 2 delta apart in depth where they meet, however far from the shooter. A key is s / a (a the depth along
+// the face's axis, s the shot's power of two), so 2 delta of depth is 2 delta k^2 / s of key: kLayerTouch, relative
+// to the key, is that only for surfaces a diagonal away. Nearer, two coplanar surfaces seen face on (spreads of 1e-7
+// of the key) were two layers, and the second lost A_1 A_2 of every pixel along their junction: a room written with 6
+// digits, its ceiling seen from its floor, had such keys 3.5e-6 apart, relative (test
+// HemicubeAccuracy.TurnedRoomOfTwoMaterialsWrittenWithSixDigitsSumsToOne). Zero (the default, and what an order
+// without a `rounding` member gives: the lists of the tests) keeps kLayerTouch alone.
+struct KeyRounding {
+  double touch = 0.0;  // keys k and k' are one plane's rounding apart when |k - k'| <= touch k^2 (2 delta / s)
+  double touch_at(double key) const { return std::max(kLayerTouch * std::abs(key), touch * key * key); }
+};
+
+// The scene's rounding an order knows (its member `rounding`), none when it knows none.
+template <class Order>
+KeyRounding rounding_of(const Order& order) {
+  if constexpr (requires { order.rounding; }) {
+    return order.rounding;
+  } else {
+    return KeyRounding{};
+  }
+}
+
 struct CoverageEntry {
   double depth = 0.0;     // any key that grows with the distance along the pixel's ray; smaller is nearer
   double coverage = 0.0;  // A: fraction of the pixel's area covered by the receiver, in [0, 1]
@@ -158,9 +182,11 @@ class CoverageWalk {
       emit(list[0].receiver, take(list[0].coverage * (1.0 - covered_)));
       return;
     }
+    const KeyRounding rounding = rounding_of(order);
     std::size_t i = 0;
     while (i < n) {
-      // The layer starting at i: whole groups of one surface, while the next group's range overlaps.
+      // The layer starting at i: whole groups of one surface, while the next group's range overlaps (within the
+      // scene's rounding).
       std::size_t j = i;
       double far = -std::numeric_limits<double>::infinity(), sum = 0.0;
       do {
@@ -170,7 +196,7 @@ class CoverageWalk {
           sum += list[j].coverage;
           ++j;
         } while (j < n && list[j].surface == surface);
-      } while (j < n && list[j].depth - list[j].spread <= far + kLayerTouch * std::abs(far));
+      } while (j < n && list[j].depth - list[j].spread <= far + rounding.touch_at(far));
       if (sum <= 1.0 + kLayerSlack) {
         // Side by side: every entry of the layer sees the f in front of it.
         const double open = 1.0 - covered_;

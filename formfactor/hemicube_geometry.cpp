@@ -297,6 +297,7 @@ void PreparedReceivers::prepare_surface_ranges(const ReceiverView& receivers) {
     all_hi = glm::max(all_hi, hi);
   }
   const Vec3 size = all_hi - all_lo;
+  diagonal_ = surface_boxes_.empty() || !std::isfinite(glm::length(size)) ? 0.0 : glm::length(size);
   const double extent = std::max({size.x, size.y, size.z});
   const double scale = extent > 0.0 && std::isfinite(extent) ? std::ldexp(1.0, std::ilogb(extent)) : 1.0;
   inverse_depth_scale_ = scale;

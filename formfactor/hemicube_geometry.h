@@ -486,6 +486,9 @@ class PreparedReceivers {
   // power of two scales every key, spread and range exactly, so the lists, and the factors, are those of the scene
   // scaled to size, bit for bit.
   double inverse_depth_scale() const { return inverse_depth_scale_; }
+  // After prepare_surface_ranges: the diagonal of the surfaces' boxes together (the scene's, for a view of a whole
+  // scene), the scale of the scene's rounding (coverage_list.h, KeyRounding); 0 for an empty view.
+  double diagonal() const { return diagonal_; }
   // For every task k of face_tasks on `face`, the receivers that may touch its columns (their face_mask has the
   // task_mask; after prepare_subset, only those it put on that task's list), in order, into lists' list k: one pass
   // without branches over the receivers for all the face's tasks, so a task's loop does not mispredict on every
@@ -567,6 +570,7 @@ class PreparedReceivers {
   std::vector<std::array<Vec3, 2>> surface_boxes_;
   std::vector<InverseDepthRange> surface_ranges_;  // kHemicubeFaces per slot, times inverse_depth_scale_
   double inverse_depth_scale_ = 1.0;
+  double diagonal_ = 0.0;
 };
 
 // Per face task: (receiver, factor) for every receiver the task rasterized, with no occlusion (the back ends'
