@@ -364,6 +364,10 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
   std::string line;
   int number = 0;
   std::map<std::string, std::pair<int, int>> unknown;  // statement -> (first line, lines)
+  // Texture coordinates and normals aarad does not use, counted to check the faces' references to them: one out of
+  // range is a damaged file (or faces copied from another), said once with its first line.
+  long long texture_coordinates = 0, normals = 0;
+  int first_bad_reference = 0, bad_references = 0;
   while (std::getline(in, line)) {
     ++number;
     const std::vector<std::string> t = split_tokens(line);
@@ -394,12 +398,33 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
         p[c] = *value;
       }
       text.positions.push_back(p);
+    } else if (key == "vt") {
+      ++texture_coordinates;
+    } else if (key == "vn") {
+      ++normals;
     } else if (key == "f") {
       for (std::size_t i = 1; i < t.size(); ++i) {
         if (!vertex_reference(t[i]))
           throw InputError(path, number, "face vertex '" + shown(t[i]) + "' is not a vertex reference; write v, "
                                          "v/vt, v//vn or v/vt/vn with whole numbers other than 0 (indices count from 1, "
                                          "negative ones from the end)");
+        // Its vt and vn parts, when given, against the texture coordinates and normals read so far.
+        const auto first_slash = t[i].find('/');
+        if (first_slash != std::string::npos) {
+          const auto second_slash = t[i].find('/', first_slash + 1);
+          const std::string vt = t[i].substr(first_slash + 1, second_slash == std::string::npos
+                                                                  ? std::string::npos
+                                                                  : second_slash - first_slash - 1);
+          const std::string vn = second_slash == std::string::npos ? std::string() : t[i].substr(second_slash + 1);
+          const auto in_range = [](const std::string& part, long long count) {
+            if (part.empty()) return true;
+            const long long k = std::strtoll(part.c_str(), nullptr, 10);
+            return (k >= 1 && k <= count) || (k <= -1 && -k <= count);
+          };
+          if (!in_range(vt, texture_coordinates) || !in_range(vn, normals)) {
+            if (bad_references++ == 0) first_bad_reference = number;
+          }
+        }
         // tinyobjloader reads indices as int: a larger one would wrap around to some other vertex.
         errno = 0;
         const long long index = std::strtoll(t[i].c_str(), nullptr, 10);
@@ -469,6 +494,12 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
     }
   }
   // In the order of their first lines, as a reader goes through the file.
+  if (bad_references > 0)
+    warnings.push_back(InputError::format(
+        path, first_bad_reference,
+        "a face refers to a texture coordinate or normal the file has not defined (" +
+            std::to_string(bad_references) + (bad_references == 1 ? " reference" : " references") +
+            " in all, this line first); aarad uses neither and reads the faces' vertices, but the file looks damaged"));
   std::vector<std::pair<std::string, std::pair<int, int>>> by_line(unknown.begin(), unknown.end());
   std::sort(by_line.begin(), by_line.end(), [](const auto& a, const auto& b) { return a.second.first < b.second.first; });
   for (const auto& [key, where] : by_line) {

@@ -363,6 +363,19 @@ TEST_F(SceneImport, import_passes_over_statements_it_does_not_read) {
   EXPECT_TRUE(has_warning(scene, "vw.obj:8: 't' is not an OBJ statement"));
 }
 
+// aarad reads neither texture coordinates nor normals, but a face's reference to one the file has not defined says
+// the file is damaged: one warning with the first line and the count (they were accepted in silence).
+TEST_F(SceneImport, import_warns_of_texture_and_normal_references_out_of_range) {
+  const std::string good = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nvt 0 0\nvt 1 0\nvn 0 0 1\n";
+  const Scene fine = import_obj(write("fine.obj", good + "f 1/1/1 2/2/1 3/-1/-1\nf 1//1 3//1 4//1\n"));
+  EXPECT_EQ(fine.faces.size(), 2u);
+  EXPECT_FALSE(has_warning(fine, "texture coordinate or normal"));
+  const Scene bad = import_obj(write("bad.obj", good + "f 1/1/1 2/2/1 3/2/1\nf 1/3 3/2 4/1\nf 2//2 5//-2 6//1\n"));
+  EXPECT_EQ(bad.faces.size(), 3u);
+  EXPECT_TRUE(has_warning(bad, "bad.obj:11: a face refers to a texture coordinate or normal the file has not defined "
+                               "(3 references in all, this line first)"));
+}
+
 TEST_F(SceneImport, import_vertex_index_out_of_range_is_error_with_line) {
   const InputError e = import_error(write("range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\n\nf 1 2 7\n"));
   EXPECT_EQ(e.line(), 5);
