@@ -494,6 +494,14 @@ TEST(Hierarchy, ContactLinesCrossingWhereAThirdEndsMakeNoLeafOfNoArea) {
   EXPECT_EQ(wrong, 0u) << "of " << h.leaf_count() << " leaves";
 }
 
+// The hierarchy keeps its invariants and has no node of no area (a zero-area leaf of the contact-line cuts).
+void expect_sound_with_no_node_of_no_area(const Hierarchy& h) {
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  std::size_t flat = 0;
+  for (NodeId node = 0; node < h.node_count(); ++node) flat += !(h.area(node) > 0.0);
+  EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
+}
+
 // A triangle standing through a floor meets it along x = 3, z from 2 to 4, and meets a face lying in the floor's
 // plane (facing down) along the same line, z from 2 to 3: two contact lines on the triangle that overlap, from one
 // start (a reviewer's fuzzing). Each was cut into element-sized pieces from its own first end, so their shared
@@ -504,11 +512,7 @@ TEST(Hierarchy, ContactLinesOverlappingAlongOneLineMakeNoLeafOfNoArea) {
                                   "v 3 0 4\nv 3 0.1 2\nv 3 -0.1 2\nv 3 1 3\nv 2 1 2\nv 2 0 2\nv 3 0 3\nv 3 0 2\n"
                                   "v 4 0 3\ng floor\nf 1 2 3 4\ng lamp\nf 5 7 8 6\ng tri\nf 10 9 11\n"
                                   "g wall\nf 14 16 17 15\n");
-  const Hierarchy h(scene, MeshingOptions{});
-  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
-  std::size_t flat = 0;
-  for (NodeId node = 0; node < h.node_count(); ++node) flat += !(h.area(node) > 0.0);
-  EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
+  expect_sound_with_no_node_of_no_area(Hierarchy(scene, MeshingOptions{}));
 }
 
 // A floor, a wall and a ramp whose feet overlap along one line that crosses the floor's edge, turned and moved
@@ -530,11 +534,7 @@ TEST(Hierarchy, ContactLinesOverlappingAcrossTheOutlineFarFromTheOriginMakeNoLea
                                   "v 331039.71856954572 331256.14257629297 325653.59835566685\n"
                                   "v 331040.13770889281 331254.21483195038 325654.1967902559\n"
                                   "g floor\nf 1 2 3 4\ng wall\nf 5 6 7\ng ramp\nf 8 9 10\n");
-  const Hierarchy h(scene, MeshingOptions{});
-  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
-  std::size_t flat = 0;
-  for (NodeId node = 0; node < h.node_count(); ++node) flat += !(h.area(node) > 0.0);
-  EXPECT_EQ(flat, 0u) << "of " << h.node_count() << " nodes";
+  expect_sound_with_no_node_of_no_area(Hierarchy(scene, MeshingOptions{}));
 }
 
 // Two coplanar strips 53 wide and 1 600 long, a strip-width apart, in one group: one surface of two faces, rotated
