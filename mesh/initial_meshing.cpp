@@ -431,11 +431,18 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     }
   };
   std::vector<std::pair<double, Vec2>> cuts;  // along an edge: parameter, point
+  // The faces as the pieces cut them: every edge split at the vertices it was cut at. Where a T-junction vertex
+  // lies a rounding off its neighbour's edge, the faces as written leave a gap a few units in the last place wide
+  // between the two (or overlap there); split, they share the pieces bit for bit, and no point falls between them.
+  std::vector<std::vector<Vec2>> split_polygons;
+  split_polygons.reserve(polygons.size());
   for (const std::vector<Vec2>& polygon : polygons) {
+    std::vector<Vec2>& split = split_polygons.emplace_back();
     for (std::size_t i = 0; i < polygon.size(); ++i) {
       const Vec2& a = polygon[i];
       const Vec2& b = polygon[(i + 1) % polygon.size()];
       if (a == b) continue;
+      split.push_back(a);
       const Vec2 d = b - a;
       const double length2 = glm::dot(d, d);
       cuts.clear();
@@ -458,6 +465,7 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
       for (const auto& [t, v] : cuts) {
         if (v == from) continue;  // a vertex of several faces
         add_piece(from, v);
+        split.push_back(v);
         from = v;
       }
       add_piece(from, b);
@@ -467,24 +475,60 @@ SurfaceMeshing mesh_general(const Scene& scene, const Surface& surface, double p
     if (count == 0) continue;
     cdt.insert_constraint(Point2(ends.first.first, ends.first.second), Point2(ends.second.first, ends.second.second));
   }
-  // A triangle whose centre lies in no face is outside the surface (a hole, a gap between faces), and so is what
-  // is reached from it without crossing a constraint; it is not meshed. The triangle itself is marked, not its
-  // centre handed to the mesher as a seed, which locates it again: the centre of a sliver (three points of a
-  // straight run that rounding bent, as where two strips' ends lie on one line) rounds onto one of its vertices or
-  // edges, and located there it named a triangle of the neighbouring face, whose whole region was then left out
-  // (two rotated strips 53 wide, one strip-width apart: a sliver of area 1.1e-11 whose centre was its vertex).
-  using Mesher = CGAL::Delaunay_mesher_2<Cdt, Criteria>;
+  // The constraints cut the triangulation into regions, each inside the surface or outside it (a hole, a gap
+  // between faces) as a whole; the regions outside are not meshed. A region is inside when most of its area is:
+  // the area of its triangles whose centres lie in a face (split at its T-junctions as above, so that only the
+  // constraints bound their union) against that of the others. No one triangle decides: the centre of a sliver
+  // along the outline (three points of a straight run that rounding bent, as where two strips' ends lie on one
+  // line) rounds onto one of its vertices or edges, or across a constraint, and a triangle spanning several faces
+  // has its centre on an edge between two of them as often as the faces' corners lie on a grid. Marked from any
+  // one triangle whose centre was in no face, the whole region was left out: a ceiling of 17 rotated tiles, far
+  // from the origin, whose largest triangle had its centre a rounding off a tile edge that ended at a T-junction,
+  // in the gap between the tile and its neighbour (the surface was then "all narrower than" the weld). The
+  // triangles themselves are marked, not their centres handed to the mesher as seeds, which it would locate again
+  // (a sliver's centre, located on its vertex, named a triangle of the neighbouring face, whose region was then
+  // left out: two rotated strips 53 wide, one strip-width apart, and a sliver of area 1.1e-11).
   std::vector<Cdt::Face_handle> triangles;
   std::vector<Point2> centres;
+  std::map<Cdt::Face_handle, std::size_t> triangle_index;
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    triangle_index.emplace(f, triangles.size());
     triangles.push_back(f);
     centres.push_back(CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
   }
-  const std::vector<std::uint8_t> inside = centres_in_faces(centres, polygons);
+  const std::vector<std::uint8_t> inside = centres_in_faces(centres, split_polygons);
   if (cdt.dimension() == 2) {  // else no triangle (faces collapsed onto a line by welding): an error below
     for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(true);
-    for (std::size_t i = 0; i < triangles.size(); ++i)
-      if (inside[i] == 0 && triangles[i]->is_in_domain()) Mesher::propagate_marks(triangles[i], false);
+    std::vector<std::uint8_t> seen(triangles.size(), 0);
+    std::vector<std::size_t> region;
+    for (std::size_t start = 0; start < triangles.size(); ++start) {
+      if (seen[start] != 0) continue;
+      // The region of triangle `start`: the finite triangles reached from it across edges that are no constraints.
+      // One that reaches the unbounded side the mesher marks outside anyway.
+      region.assign(1, start);
+      seen[start] = 1;
+      double in_area = 0.0, out_area = 0.0;
+      bool any_out = false;
+      for (std::size_t k = 0; k < region.size(); ++k) {
+        const Cdt::Face_handle f = triangles[region[k]];
+        const double a = std::abs(CGAL::area(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()));
+        (inside[region[k]] != 0 ? in_area : out_area) += a;
+        any_out = any_out || inside[region[k]] == 0;
+        for (int e = 0; e < 3; ++e) {
+          const Cdt::Face_handle g = f->neighbor(e);
+          if (f->is_constrained(e) || cdt.is_infinite(g)) continue;
+          const std::size_t j = triangle_index.at(g);
+          if (seen[j] == 0) {
+            seen[j] = 1;
+            region.push_back(j);
+          }
+        }
+      }
+      // A region of no area (faces welded flat) is inside only when every centre is, as before.
+      const bool in = in_area > out_area || (in_area == out_area && !any_out);
+      if (!in)
+        for (const std::size_t k : region) triangles[k]->set_in_domain(false);
+    }
     // With the domain specified, the mesher marks the faces reached from the unbounded side out too, as with seeds.
     CGAL::refine_Delaunay_mesh_2(cdt, Criteria(0.125, patch_size), true);
   }

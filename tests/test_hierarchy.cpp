@@ -561,6 +561,39 @@ TEST(Hierarchy, TwoStripsOfOneSurfaceAreBothMeshed) {
   EXPECT_NEAR(area, scene.surfaces[0].area, 1e-9 * scene.surfaces[0].area);
 }
 
+// A wall of six tiles in three rows, the two rows on either side of one row line equally high, each row cut once
+// (T-junctions where a row's cut meets its neighbour's edge), rotated and far from the origin. The constrained
+// triangulation of its outline has a triangle from that row line's end to the other row line's end on the same side
+// and the far corner beyond the first line: its median from the first corner runs along the first line, so its
+// centre lies on the tile edges there, and rounded, it fell in the gap a few units in the last place wide between a
+// tile's edge and its neighbour's edge, which ends at a T-junction vertex written a rounding off the first.
+// Counted in no face, that triangle marked the whole surface outside, and the meshing refused it as "all narrower
+// than" the weld.
+TEST(Hierarchy, ATriangleCentredOnATileEdgeAtATJunctionIsInside) {
+  const Scene scene = import_text("aarad-tiled-wall",
+                                  "v -54712.225299867569 -21880.415955836361 290559.74457120651\n"
+                                  "v -54757.838795827796 -22030.721339991975 290352.29786628665\n"
+                                  "v -54896.138666153201 -22080.141210805708 290418.51445550303\n"
+                                  "v -54850.525170192974 -21929.835826650095 290625.96116042288\n"
+                                  "v -54778.717276485972 -22099.520014372243 290257.34412671695\n"
+                                  "v -54917.017146811377 -22148.939885185977 290323.56071593333\n"
+                                  "v -54867.347640277432 -21985.269153459674 290549.45384796703\n"
+                                  "v -54962.060110713552 -22019.113567358178 290594.80122778582\n"
+                                  "v -54945.237640629093 -21963.680240548598 290671.30854024168\n"
+                                  "v -55011.729617247496 -22182.78429908448 290368.90809575212\n"
+                                  "v -54974.893062200899 -22061.4006506556 290536.43794199935\n"
+                                  "v -55069.605532637019 -22095.245064554103 290581.78532181814\n"
+                                  "v -55039.950111065213 -21997.524654447101 290716.65592006047\n"
+                                  "v -55106.442087683616 -22216.628712982983 290414.25547557091\n"
+                                  "g tiles\nf 1 2 3 4\nf 2 5 6 3\nf 4 7 8 9\nf 7 6 10 8\nf 9 11 12 13\nf 11 10 14 12\n");
+  ASSERT_EQ(scene.surfaces.size(), 1u);
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  double area = 0.0;
+  for (const NodeId patch : h.patches()) area += h.area(patch);
+  EXPECT_NEAR(area, scene.surfaces[0].area, 1e-9 * scene.surfaces[0].area);
+}
+
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off
 // the plane, as two triangles, is meshed as the quad with its corners moved onto the surface's plane, so no
 // child leaves its parent's plane.
