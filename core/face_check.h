@@ -8,6 +8,7 @@
 
 #include "aarad/core/math.h"
 
+#include <algorithm>
 #include <span>
 #include <vector>
 
@@ -49,5 +50,28 @@ struct FaceCheck {
 };
 
 FaceCheck check_face(std::span<const Vec3> vertices);
+
+// How far the vertices of a polygon lie from the line through two of them far apart (the farthest from the first
+// vertex, and the farthest from that one): for a triangle, its smallest altitude. A face whose width is below the
+// meshing's weld distance (kPlaneDistance x the scene's diagonal, scene.h) collapses there onto its own edges.
+inline double width_across(std::span<const Vec3> vertices) {
+  if (vertices.size() < 3) return 0.0;
+  const auto farthest_from = [&](const Vec3& p) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < vertices.size(); ++i)
+      if (glm::dot(vertices[i] - p, vertices[i] - p) > glm::dot(vertices[best] - p, vertices[best] - p)) best = i;
+    return vertices[best];
+  };
+  const Vec3 a = farthest_from(vertices[0]), b = farthest_from(a);
+  const Vec3 d = b - a;
+  const double length2 = glm::dot(d, d);
+  if (!(length2 > 0.0)) return 0.0;
+  double width = 0.0;
+  for (const Vec3& v : vertices) {
+    const Vec3 off = (v - a) - (glm::dot(v - a, d) / length2) * d;
+    width = std::max(width, glm::length(off));
+  }
+  return width;
+}
 
 }  // namespace aarad

@@ -998,6 +998,22 @@ Scene import_obj(const std::string& obj_path) {
       note_skip(k.line);
       continue;
     }
+    // A face narrower everywhere than the meshing's weld distance (kPlaneDistance of the diagonal: a sliver, all
+    // its vertices within that of one line) collapses there onto its own edges; a surface of only such faces was
+    // refused by the Delaunay path, but a lone triangle went to the grid path, whose patches of a face 7e-11 wide
+    // and 1.6 long had no plane to keep their corners on (children 6.7e-8 off their parents' planes) and elements
+    // far below min_area. Its area (below kPlaneDistance x its length x the diagonal) is no light to speak of, so it
+    // is skipped with a warning, as the faces too small are.
+    const double width = width_across(k.polygon);
+    if (width <= kPlaneDistance * glm::length(high - low)) {
+      warnings.push_back(InputError::format(
+          obj_path, k.line, "face too narrow against the scene (its width " + number_text(width) + " is below " +
+                                number_text(kPlaneDistance) + " of the scene's diagonal, " +
+                                number_text(kPlaneDistance * glm::length(high - low)) +
+                                ", which the meshing takes for a rounding error) skipped; make it wider or remove it"));
+      note_skip(k.line);
+      continue;
+    }
     std::optional<std::uint32_t>& group = groups[k.shape];
     if (!group) {
       // A control character of a name (an escape sequence) is shown as \xNN wherever the name is printed.

@@ -7,6 +7,7 @@
 #include "aarad/mesh/initial_meshing.h"
 
 #include "aarad/core/error.h"
+#include "aarad/core/face_check.h"
 #include "aarad/core/polygon.h"
 #include "aarad/core/predicates.h"
 
@@ -1066,6 +1067,10 @@ SurfaceMeshing mesh_surface(const Scene& scene, std::uint32_t surface_id, double
   std::optional<std::vector<Vec3>> outline =
       surface.faces.size() == 1 ? std::optional<std::vector<Vec3>>(first) : convex_outline(scene, surface, frame);
   std::optional<SurfaceMeshing> meshing;
+  // An outline narrower than the weld distance (a sliver: its corners all within that of one line) has no plane the
+  // grids could keep their points on (a triangle 7e-11 wide made children 6.7e-8 off their parents' planes): the
+  // Delaunay path takes it, which welds it flat and refuses a surface of nothing but such faces, naming a line.
+  if (outline && width_across(*outline) <= kPlaneDistance * diagonal) outline.reset();
   if (outline) {
     // The grids interpolate between the corners, so a corner that import let off the surface's plane (faces
     // within 1e-6 of the diagonal join a surface) would take whole rows of patches off it: such corners are

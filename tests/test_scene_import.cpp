@@ -1562,5 +1562,23 @@ TEST(ObjExport, TextOfASmallScene) {
             "newmtl red_paint\nKd 0.5 0.5 0.5\nKe 0 0 0\nnewmtl red_paint_2\nKd 0.5 0.5 0.5\nKe 0 0 0\n");
 }
 
+// A triangle 1.6 long and 7e-11 wide (rotated, 9 digits) is narrower than the meshing's weld distance (1e-6 of the
+// diagonal): skipped with a warning naming its line, as the faces too small are. Kept, it was a surface of its own
+// whose grid of patches had children 6.7e-8 off their parents' planes.
+TEST_F(SceneImport, import_skips_faces_narrower_than_the_weld_distance) {
+  const Scene scene = import_obj(write("sliver.obj",
+                                       "v -0.887548019 -1.2641943 0.407461708\nv -0.20628168 -0.293820862 0.0947012262\n"
+                                       "v 0 0 0\nf 1 2 3\n"
+                                       "v -0.507823734 -2.43165219 3.34620316\nv -0.890774166 -1.57353266 5.17445575\n"
+                                       "v 0.459412972 -2.3177186 5.80656493\nv 0.842363403 -3.17583813 3.97831235\n"
+                                       "f 4 5 6 7\n"));
+  ASSERT_EQ(scene.faces.size(), 1u);
+  EXPECT_EQ(scene.faces[0].source_line, 9);
+  const auto said = std::find_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
+    return w.find("sliver.obj:4: face too narrow against the scene") != std::string::npos;
+  });
+  EXPECT_NE(said, scene.warnings.end());
+}
+
 }  // namespace
 }  // namespace aarad
