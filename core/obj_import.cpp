@@ -493,13 +493,13 @@ ObjText read_obj_text(const std::string& path, std::istream& in, std::vector<std
                                                             "out: from the scene's size)"));
     }
   }
-  // In the order of their first lines, as a reader goes through the file.
   if (bad_references > 0)
     warnings.push_back(InputError::format(
         path, first_bad_reference,
         "a face refers to a texture coordinate or normal the file has not defined (" +
             std::to_string(bad_references) + (bad_references == 1 ? " reference" : " references") +
             " in all, this line first); aarad uses neither and reads the faces' vertices, but the file looks damaged"));
+  // In the order of their first lines, as a reader goes through the file.
   std::vector<std::pair<std::string, std::pair<int, int>>> by_line(unknown.begin(), unknown.end());
   std::sort(by_line.begin(), by_line.end(), [](const auto& a, const auto& b) { return a.second.first < b.second.first; });
   for (const auto& [key, where] : by_line) {
@@ -840,6 +840,12 @@ Scene import_obj(const std::string& obj_path) {
   const std::size_t vertex_count = attrib.vertices.size() / 3;
   const bool positions_known = text.positions.size() == vertex_count;
   const std::string stem = fs::path(obj_path).stem().string();
+  // A shape's group: its name, with a control character (an escape sequence) shown as \xNN wherever it is printed,
+  // or the file's stem for faces before any `o` or `g`.
+  const auto group_name_of = [&stem](const tinyobj::shape_t& shape) {
+    const std::string name = printable(trim(shape.name));
+    return !name.empty() ? name : stem.empty() ? std::string("default") : stem;
+  };
   // tinyobjloader keeps a face's vertex count in an unsigned char (mesh_t::num_face_vertices): a face of 256
   // or more vertices comes back with its count modulo 256, though all its vertex indices are there. The count
   // on the face's line is the true one; without the lines (never seen), such a face cannot be read.
@@ -913,8 +919,7 @@ Scene import_obj(const std::string& obj_path) {
   std::unordered_set<std::size_t, decltype(face_hash), decltype(same_face)> kept_faces(0, face_hash, same_face);
   for (std::size_t shape_index = 0; shape_index < shapes.size(); ++shape_index) {
     const auto& shape = shapes[shape_index];
-    std::string group_name = printable(trim(shape.name));
-    if (group_name.empty()) group_name = stem.empty() ? std::string("default") : stem;
+    const std::string group_name = group_name_of(shape);
     const std::uint32_t group_number =
         group_numbers.try_emplace(group_name, static_cast<std::uint32_t>(group_numbers.size())).first->second;
     std::size_t offset = 0;
@@ -986,6 +991,7 @@ Scene import_obj(const std::string& obj_path) {
       high = glm::max(high, p);
     }
   const double smallest = kSmallestFace * glm::length(high - low);
+  const double weld = kPlaneDistance * glm::length(high - low);  // the meshing's (scene.h)
   std::vector<std::optional<std::uint32_t>> groups(shapes.size());
   for (Kept& k : kept) {
     const double size = box_diagonal(k.polygon);
@@ -1005,21 +1011,16 @@ Scene import_obj(const std::string& obj_path) {
     // far below min_area. Its area (below kPlaneDistance x its length x the diagonal) is no light to speak of, so it
     // is skipped with a warning, as the faces too small are.
     const double width = width_across(k.polygon);
-    if (width <= kPlaneDistance * glm::length(high - low)) {
+    if (width <= weld) {
       warnings.push_back(InputError::format(
           obj_path, k.line, "face too narrow against the scene (its width " + number_text(width) + " is below " +
-                                number_text(kPlaneDistance) + " of the scene's diagonal, " +
-                                number_text(kPlaneDistance * glm::length(high - low)) +
+                                number_text(kPlaneDistance) + " of the scene's diagonal, " + number_text(weld) +
                                 ", which the meshing takes for a rounding error) skipped; make it wider or remove it"));
       note_skip(k.line);
       continue;
     }
     std::optional<std::uint32_t>& group = groups[k.shape];
-    if (!group) {
-      // A control character of a name (an escape sequence) is shown as \xNN wherever the name is printed.
-      const std::string name = printable(trim(shapes[k.shape].name));
-      group = scene.add_group(!name.empty() ? name : stem.empty() ? std::string("default") : stem);
-    }
+    if (!group) group = scene.add_group(group_name_of(shapes[k.shape]));
     scene.add_face(*group, k.material, std::move(k.polygon), k.line, k.smoothing);
   }
   std::vector<Kept>().swap(kept);

@@ -494,6 +494,16 @@ TEST(Hierarchy, ContactLinesCrossingWhereAThirdEndsMakeNoLeafOfNoArea) {
   EXPECT_EQ(wrong, 0u) << "of " << h.leaf_count() << " leaves";
 }
 
+// `scene` is one surface, and its hierarchy keeps its invariants and has patches covering the surface's whole area.
+void expect_one_surface_meshed_whole(const Scene& scene) {
+  ASSERT_EQ(scene.surfaces.size(), 1u);
+  const Hierarchy h(scene, MeshingOptions{});
+  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
+  double area = 0.0;
+  for (const NodeId patch : h.patches()) area += h.area(patch);
+  EXPECT_NEAR(area, scene.surfaces[0].area, 1e-9 * scene.surfaces[0].area);
+}
+
 // The hierarchy keeps its invariants and has no node of no area (a zero-area leaf of the contact-line cuts).
 void expect_sound_with_no_node_of_no_area(const Hierarchy& h) {
   EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
@@ -553,12 +563,7 @@ TEST(Hierarchy, TwoStripsOfOneSurfaceAreBothMeshed) {
                                   "v 1160.8714370830564 -1972.0132755412662 2665.6168274593488\n"
                                   "v 1107.6278559347759 -1949.6013600443089 2663.1422069384275\n"
                                   "g strips\nf 4 3 6 5\nf 2 1 8 7\n");
-  ASSERT_EQ(scene.surfaces.size(), 1u);
-  const Hierarchy h(scene, MeshingOptions{});
-  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
-  double area = 0.0;
-  for (const NodeId patch : h.patches()) area += h.area(patch);
-  EXPECT_NEAR(area, scene.surfaces[0].area, 1e-9 * scene.surfaces[0].area);
+  expect_one_surface_meshed_whole(scene);
 }
 
 // A wall of six tiles in three rows, the two rows on either side of one row line equally high, each row cut once
@@ -586,12 +591,7 @@ TEST(Hierarchy, ATriangleCentredOnATileEdgeAtATJunctionIsInside) {
                                   "v -55039.950111065213 -21997.524654447101 290716.65592006047\n"
                                   "v -55106.442087683616 -22216.628712982983 290414.25547557091\n"
                                   "g tiles\nf 1 2 3 4\nf 2 5 6 3\nf 4 7 8 9\nf 7 6 10 8\nf 9 11 12 13\nf 11 10 14 12\n");
-  ASSERT_EQ(scene.surfaces.size(), 1u);
-  const Hierarchy h(scene, MeshingOptions{});
-  EXPECT_TRUE(check_invariants(h).empty()) << describe(check_invariants(h));
-  double area = 0.0;
-  for (const NodeId patch : h.patches()) area += h.area(patch);
-  EXPECT_NEAR(area, scene.surfaces[0].area, 1e-9 * scene.surfaces[0].area);
+  expect_one_surface_meshed_whole(scene);
 }
 
 // Import lets faces within 1e-6 of the diagonal join one surface: a square whose corner (1, 1) is 1e-7 off

@@ -1127,10 +1127,7 @@ TEST_F(SceneImport, import_skips_faces_too_small_against_the_scene) {
                                                                "v -1e6 1 1e6\nf 1 2 3 4 5\nf 6 9 8 7\n"));
   ASSERT_EQ(scene.faces.size(), 1u);
   EXPECT_EQ(scene.faces[0].source_line, 11);
-  const auto said = std::find_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
-    return w.find("speck.obj:10: face too small against the scene") != std::string::npos;
-  });
-  EXPECT_NE(said, scene.warnings.end());
+  EXPECT_TRUE(has_warning(scene, "speck.obj:10: face too small against the scene"));
   const InputError e = import_error(write("specks.obj", pentagon + "v 0 1e6 0\nv 1 1e6 0\nv 0 1e6 1\nf 1 2 3 4 5\n"
                                                                    "f 6 7 8\n"));
   EXPECT_NE(e.message().find("specks.obj:9: face too small against the scene"), std::string::npos) << e.message();
@@ -1574,10 +1571,7 @@ TEST_F(SceneImport, import_skips_faces_narrower_than_the_weld_distance) {
                                        "f 4 5 6 7\n"));
   ASSERT_EQ(scene.faces.size(), 1u);
   EXPECT_EQ(scene.faces[0].source_line, 9);
-  const auto said = std::find_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
-    return w.find("sliver.obj:4: face too narrow against the scene") != std::string::npos;
-  });
-  EXPECT_NE(said, scene.warnings.end());
+  EXPECT_TRUE(has_warning(scene, "sliver.obj:4: face too narrow against the scene"));
 }
 
 }  // namespace
