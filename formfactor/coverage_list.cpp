@@ -44,7 +44,9 @@ bool PartialLists::insert_into(std::uint32_t& list, const CoverageEntry& entry) 
     for (; k <= count; ++k) {
       const CoverageEntry& e = cells[k].entry;
       if (e.surface == surface) break;
-      if (position > count && e.surface != prev_surface && e.depth > entry.depth) position = k;
+      if (position > count && e.surface != prev_surface &&
+          (e.depth > entry.depth || (e.depth == entry.depth && in_front_at_equal_key(surface, e.surface))))
+        position = k;
       prev_surface = e.surface;
     }
     joins = k <= count;

@@ -121,13 +121,33 @@ inline bool same_plane_keys(const CoverageEntry& a, const CoverageEntry& b) {
          std::abs(a.spread - b.spread) <= 1e-6f * std::max(a.spread, b.spread);
 }
 
+// Equal keys. Two surfaces lying on one another in one plane (a lamp laid on a ceiling, which the import warns of)
+// have the same key in every pixel they share, exactly when their planes are the same numbers. Which of them is in
+// front there must not depend on the order the receivers arrive in: a leaf that won a pixel by arriving first, split,
+// had pieces numbered after the other surface's, which then won; the pieces of the leaf shared its factor in
+// proportion to what little they got at the pixel's edges, and a plate under such a lamp ended with radiosities from
+// -383 to 366 (test HemicubeAccuracy.SurfacesOnOneAnotherInOnePlaneHideOneAnotherWhateverTheirPieces). At equal keys
+// the surface with the lower id is in front, in both hemicubes: the first surface of the file.
+inline bool in_front_at_equal_key(std::uint32_t surface, std::uint32_t other_surface) {
+  return surface < other_surface;
+}
+
 // Whether `entry` lies wholly behind `full`, the head of a group of one surface that covers the pixel (or an entry
 // that covers it alone): its depth range starts behind the group's, or it lies in the group's plane (coplanar
-// surfaces, which the group's pieces cover). An entry whose range reaches into the group's may lie in front of part
-// of it, where a surface of the group runs on behind another (see "A full pixel" above), and is kept for the walk.
+// surfaces, which the group's pieces cover), but for an entry at the group's very key that is in front of it by the
+// rule of equal keys. An entry whose range reaches into the group's may lie in front of part of it, where a surface
+// of the group runs on behind another (see "A full pixel" above), and is kept for the walk.
 inline bool hidden_by_full_group(const CoverageEntry& full, const CoverageEntry& entry) {
   const double far = full.depth + full.spread;
-  return !(entry.depth - entry.spread <= far + kLayerTouch * std::abs(far)) || same_plane_keys(entry, full);
+  if (!(entry.depth - entry.spread <= far + kLayerTouch * std::abs(far))) return true;
+  return same_plane_keys(entry, full) &&
+         !(entry.depth == full.depth && in_front_at_equal_key(entry.surface, full.surface));
+}
+
+// Whether a full entry of `surface` at key `depth` takes a pixel whose nearest full entry is at `full_depth`, of
+// `full_surface`: nearer, or at the same key and in front by the rule of equal keys.
+inline bool takes_full_pixel(double depth, std::uint32_t surface, double full_depth, std::uint32_t full_surface) {
+  return depth < full_depth || (depth == full_depth && in_front_at_equal_key(surface, full_surface));
 }
 
 // Adds `share` to a pixel's f (`covered`), capped so that f never exceeds 1 (overlapping pieces of one surface,
@@ -493,7 +513,8 @@ double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&
 // A list is a small contiguous array (capacity 2, doubled by moving to the end of the pool when full), kept
 // sorted by insertion sort, so it is one or two cache lines whatever order receivers arrive in. An entry joins
 // the group of its surface when the list has one (after its last piece), else goes in at its depth (behind
-// entries at the same depth; positions are decided at group heads only, so groups stay contiguous). A group
+// entries at the same depth but for those it is in front of by the rule of equal keys; positions are decided at
+// group heads only, so groups stay contiguous). A group
 // whose coverages reach kFullCoverage drops the entries behind it and the list refuses new groups behind it (but
 // for those whose depth range reaches into the group's: see "A full pixel" above).
 // A group's coverage sum is its entries' coverages added front to back. The header keeps the group that took the
@@ -599,12 +620,14 @@ class CoverageArena {
   // Empties every list (O(1) after take_all) and makes room for `pixels` pixels; keeps all memory.
   void reset(std::size_t pixels);
 
-  // Inserts an entry into the list of `pixel` at its depth (behind entries at the same depth), or into the
+  // Inserts an entry into the list of `pixel` at its depth (behind entries at the same depth, but for the rule of
+  // equal keys), or into the
   // group of its surface when the list has one. Returns false when the pixel is full in front of it.
   bool insert(std::size_t pixel, const CoverageEntry& entry) {
     ++entries_;
     if (entry.coverage >= kFullCoverage) {
-      if (!(entry.depth < depth_[pixel])) return false;  // behind the nearest full entry
+      if (!takes_full_pixel(entry.depth, entry.surface, depth_[pixel], full_meta_[pixel].surface))
+        return false;  // behind the nearest full entry
       depth_[pixel] = entry.depth;
       receiver_[pixel] = entry.receiver;
       full_meta_[pixel] = FullMeta{entry.spread, entry.surface};
@@ -700,7 +723,10 @@ class CoverageArena {
           while (position < list.size() && list[position].surface == full.surface) ++position;
           break;
         }
-        if (head && position == list.size() && list[k].depth > full.depth) position = k;
+        if (head && position == list.size() &&
+            (list[k].depth > full.depth ||
+             (list[k].depth == full.depth && in_front_at_equal_key(full.surface, list[k].surface))))
+          position = k;
       }
       merged.assign(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(position));
       merged.push_back(full);
@@ -794,8 +820,14 @@ class StagedCoverageArena {
     __builtin_prefetch(&depth_[pixel + 2 * height_]);
     __builtin_prefetch(&receiver_[pixel + 2 * height_]);
     if (!(entry.depth < depth_[pixel])) [[unlikely]] {
-      // Behind the nearest full entry: dropped, but for a partial entry whose range reaches into the full entry's.
-      if (entry.coverage < kFullCoverage) stage_behind_full(x, pixel, entry);
+      // Behind the nearest full entry: dropped, but for a partial entry whose range reaches into the full entry's,
+      // and a full entry at its very key that is in front of it by the rule of equal keys.
+      if (entry.coverage < kFullCoverage) {
+        stage_behind_full(x, pixel, entry);
+      } else if (entry.depth == depth_[pixel] &&
+                 in_front_at_equal_key(entry.surface, receiver_meta_[receiver_[pixel]].surface)) {
+        receiver_[pixel] = entry.receiver;
+      }
       return;
     }
     if (entry.coverage >= kFullCoverage) {

@@ -1,6 +1,8 @@
 // The classical hemicube (Cohen and Greenberg 1985): point sampling, z-buffer and item buffer per face.
 #include "aarad/formfactor/hemicube.h"
 
+#include "aarad/formfactor/coverage_list.h"
+
 #include <tbb/parallel_for.h>
 
 #include <limits>
@@ -14,8 +16,9 @@ constexpr std::uint32_t kNoItem = std::numeric_limits<std::uint32_t>::max();
 HemicubeBackend::HemicubeBackend(int resolution) : geometry_(resolution) {}
 
 void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
-                                 const TileMask* tiles, std::size_t max_vertices, FaceBuffers& b,
-                                 std::span<double> sums, UnoccludedList& unoccluded) const {
+                                 std::span<const std::uint32_t> surfaces, const TileMask* tiles,
+                                 std::size_t max_vertices, FaceBuffers& b, std::span<double> sums,
+                                 UnoccludedList& unoccluded) const {
   const HemicubeFace face = task.face;
   // The buffers hold the task's columns [task.x0, task.x1) of the face, row-major.
   const int face_width = geometry_.width(face), width = task.x1 - task.x0, height = geometry_.height(face);
@@ -62,7 +65,11 @@ void HemicubeBackend::shoot_task(const FaceTask& task, std::span<const std::uint
       if (!(inverse_depth >= box.lo)) inverse_depth = box.lo;
       if (inverse_depth > box.hi) inverse_depth = box.hi;
       const std::size_t p = static_cast<std::size_t>(y) * width + (x - task.x0);
-      if (inverse_depth > b.inverse_depth[p]) {
+      // Nearer, or at the same key and in front by the rule of equal keys (coverage_list.h): which of two surfaces
+      // on one another in one plane a sample shows does not depend on the receivers' order.
+      if (inverse_depth > b.inverse_depth[p] ||
+          (inverse_depth == b.inverse_depth[p] && b.item[p] != kNoItem &&
+           in_front_at_equal_key(surfaces[i], surfaces[b.item[p]]))) {
         b.inverse_depth[p] = inverse_depth;
         b.item[p] = item;
       }
@@ -95,7 +102,7 @@ void HemicubeBackend::compute(const Shooter& shooter, const ReceiverView& receiv
   const std::array<FaceTask, kFaceTasks> tasks = face_tasks(geometry_.resolution());
   sums_.start(tasks, geometry_.resolution(), prepared_, receivers.size());
   run_face_tasks(sums_.loads(), [&](int t) {
-    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t),
+    shoot_task(tasks[static_cast<std::size_t>(t)], sums_.receivers(t), receivers.surfaces(),
                subset.empty() ? nullptr : &prepared_.subset_tiles(t), max_vertices, buffers_.local(), sums_.sums(t),
                task_unoccluded_[static_cast<std::size_t>(t)]);
   });

@@ -99,10 +99,10 @@ class HemicubeBackend final : public FormFactorBackend {
     std::vector<ScanCrossing> crossings;
   };
   // One task of a shot: every candidate, or for a subset (`tiles`: PreparedReceivers::subset_tiles) only those
-  // whose box meets its tiles.
-  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates, const TileMask* tiles,
-                  std::size_t max_vertices, FaceBuffers& buffers, std::span<double> sums,
-                  UnoccludedList& unoccluded) const;
+  // whose box meets its tiles. `surfaces` holds the receivers' physical-surface ids.
+  void shoot_task(const FaceTask& task, std::span<const std::uint32_t> candidates,
+                  std::span<const std::uint32_t> surfaces, const TileMask* tiles, std::size_t max_vertices,
+                  FaceBuffers& buffers, std::span<double> sums, UnoccludedList& unoccluded) const;
 
   HemicubeGeometry geometry_;
   PreparedReceivers prepared_;

@@ -259,7 +259,7 @@ TEST(FormfactorCoverageList, ArenaKeepsAGroupWholeWhenAnotherSurfaceLiesBetweenI
 }
 
 // The list rules, written out plainly over groups: an entry joins its surface's group (after its last piece),
-// or starts a group before the first group whose head lies behind it; a group whose coverages reach the pixel
+// or starts a group before the first group whose head lies behind it (or at its depth, of a higher surface); a group whose coverages reach the pixel
 // drops the groups behind it, and a covered list refuses new groups behind them all. Random arrivals, with runs
 // of one surface (the arena's shortcut for the group that took the last entry) and without.
 TEST(FormfactorCoverageList, ArenaListsFollowTheGroupRulesWhateverTheArrivals) {
@@ -295,7 +295,10 @@ TEST(FormfactorCoverageList, ArenaListsFollowTheGroupRulesWhateverTheArrivals) {
           full = true;
         }
       } else {
-        g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) { return x.head > e.depth; });
+        // At the same depth, the lower surface goes first (the rule of equal keys).
+        g = std::find_if(groups.begin(), groups.end(), [&](const Group& x) {
+          return x.head > e.depth || (x.head == e.depth && surface < x.surface);
+        });
         if (g == groups.end() && full)
           accepted = false;
         else
@@ -317,24 +320,54 @@ TEST(FormfactorCoverageList, ArenaListsFollowTheGroupRulesWhateverTheArrivals) {
   EXPECT_GT(refused, 100);
 }
 
-TEST(FormfactorCoverageList, AFullEntryAtThePartialEntrysDepthHidesItWhateverTheOrder) {
-  // A partial entry at exactly the depth of a full one is not in front of it: offered after the full entry it is
-  // refused, so offered before it must be dropped too, and the full receiver takes the whole pixel either way.
-  for (const bool partial_first : {true, false}) {
+TEST(FormfactorCoverageList, AFullEntryAtThePartialEntrysDepthHidesItOrNotWhateverTheOrder) {
+  // A partial entry at exactly the depth of a full one of another surface is in front of it when its surface is the
+  // lower (the rule of equal keys), else hidden: offered after the full entry it is refused, so offered before it
+  // it must be dropped too, and the full receiver takes the whole pixel either way.
+  for (const std::uint32_t partial_surface : {1u, 3u}) {
+    for (const bool partial_first : {true, false}) {
+      CoverageArena arena;
+      arena.reset(1);
+      const CoverageEntry partial{2.0, 0.5, 0, partial_surface}, full{2.0, 1.0, 1, 2};
+      const bool in_front = partial_surface < full.surface;
+      if (partial_first) arena.insert(0, partial);
+      EXPECT_TRUE(arena.insert(0, full));
+      if (!partial_first) {
+        EXPECT_EQ(arena.insert(0, partial), in_front);
+      }
+      std::vector<double> e(2, -1.0);
+      EXPECT_DOUBLE_EQ(arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; }), 1.0);
+      const std::vector<double> expected = in_front ? std::vector<double>{0.5, 0.5} : std::vector<double>{-1.0, 1.0};
+      EXPECT_EQ(e, expected) << partial_first << " " << partial_surface;
+      std::vector<double> taken(2, -1.0);
+      arena.take_all([&](std::size_t, std::uint32_t r, double v) { taken[r] = v; });
+      EXPECT_EQ(taken, e) << partial_first << " " << partial_surface;
+    }
+  }
+}
+
+TEST(FormfactorCoverageList, FullEntriesAtOneDepthGoToTheLowerSurfaceWhateverTheOrder) {
+  // Two surfaces lying on one another in one plane: the lower surface takes the pixel, whichever arrives first, in
+  // both arenas.
+  for (const bool lower_first : {true, false}) {
+    const CoverageEntry lower{2.0, 1.0, 0, 4}, higher{2.0, 1.0, 1, 7};
     CoverageArena arena;
     arena.reset(1);
-    const CoverageEntry partial{2.0, 0.5, 0, 1}, full{2.0, 1.0, 1, 2};
-    if (partial_first) arena.insert(0, partial);
-    EXPECT_TRUE(arena.insert(0, full));
-    if (!partial_first) {
-      EXPECT_FALSE(arena.insert(0, partial));
-    }
-    std::vector<double> e(2, -1.0);
-    EXPECT_DOUBLE_EQ(arena.resolve(0, [&](std::uint32_t r, double v) { e[r] = v; }), 1.0);
-    EXPECT_EQ(e, (std::vector<double>{-1.0, 1.0})) << partial_first;
-    std::vector<double> taken(2, -1.0);
-    arena.take_all([&](std::size_t, std::uint32_t r, double v) { taken[r] = v; });
-    EXPECT_EQ(taken, e) << partial_first;
+    StagedCoverageArena staged;
+    staged.reset(1, 1);
+    staged.describe_receivers(2);
+    staged.describe(0, 0.0f, lower.surface);
+    staged.describe(1, 0.0f, higher.surface);
+    const std::vector<CoverageEntry> arrivals = lower_first ? std::vector{lower, higher} : std::vector{higher, lower};
+    // The first is taken; the second only when it is the lower.
+    EXPECT_TRUE(arena.insert(0, arrivals[0]));
+    EXPECT_EQ(arena.insert(0, arrivals[1]), !lower_first);
+    for (const CoverageEntry& entry : arrivals) staged.insert(0, 0, entry);
+    std::vector<double> e(2, 0.0), taken(2, 0.0);
+    arena.take_all([&](std::size_t, std::uint32_t r, double v) { e[r] += v; });
+    staged.take_all([&](std::size_t, std::uint32_t r, double v) { taken[r] += v; });
+    EXPECT_EQ(e, (std::vector<double>{1.0, 0.0})) << lower_first;
+    EXPECT_EQ(taken, e) << lower_first;
   }
 }
 
