@@ -681,7 +681,8 @@ std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const
 }
 
 // Faces laid on one another in one plane (a rug on a floor, a face copied into a second group): both are lit
-// there and both count the area, where in the real scene one hides the other.
+// there and both count the area, where in the real scene one hides the other. The hemicubes show the surface made
+// first (the lower id: formfactor/coverage_list.h, "Equal keys").
 void warn_about_overlaps(const Scene& scene, const std::string& path, std::vector<std::string>& warnings) {
   constexpr std::size_t kMostWarnings = 10;
   // n copies of one face overlap in n (n - 1) / 2 pairs: 16 000 of them, a 300 KB file, took 8 GB and a minute to
@@ -705,7 +706,8 @@ void warn_about_overlaps(const Scene& scene, const std::string& path, std::vecto
       warnings.push_back(InputError::format(
           path, o.line_a, name(o.a) + " and " + name(o.b) + " lie on one another in one plane over " + amount +
                               " (" + lines + " overlap most): both are lit there and both count that area, where "
-                              "one would hide the other; cut one out of the other, or move one off the plane"));
+                              "one would hide the other (the hemicubes show " + name(std::min(o.a, o.b)) +
+                              ", made first); cut one out of the other, or move one off the plane"));
     }
   }
   std::string more;
