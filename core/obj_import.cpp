@@ -703,11 +703,12 @@ void warn_about_overlaps(const Scene& scene, const std::string& path, std::vecto
           path, o.line_a, "faces of " + name(o.a) + " overlap each other over " + amount + " (" + lines +
                               " overlap most): that area is lit and counted twice; remove the overlap"));
     } else {
+      const std::string shown = scene.groups[scene.surfaces[std::min(o.a, o.b)].group].name;
       warnings.push_back(InputError::format(
           path, o.line_a, name(o.a) + " and " + name(o.b) + " lie on one another in one plane over " + amount +
                               " (" + lines + " overlap most): both are lit there and both count that area, where "
-                              "one would hide the other (the hemicubes show " + name(std::min(o.a, o.b)) +
-                              ", made first); cut one out of the other, or move one off the plane"));
+                              "one would hide the other, and the hemicubes show '" + shown + "' (it comes first); "
+                              "cut one out of the other, or move one off the plane"));
     }
   }
   std::string more;
