@@ -874,15 +874,16 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
 
 // The pieces of a split leaf tile it, yet the factors computed afresh for them need not add up to the leaf's: the
 // near-field correction reshapes with the pieces' own centroids; where two surfaces lie on one another in one plane
-// (a rug laid on a floor), the pixels they share go to one or the other by the sizes of the leaves in them; and where
-// surfaces meet inside a pixel and one runs on behind the other (the floor under a box standing on it, a wall behind
-// stairs or a lamp touching it), the AA hemicube's layer rule (formfactor/coverage_list.h) walks the pixel side by
-// side or front to back depending on the coverages of the leaves there, and the leaves that were not split keep what
-// they got beside the whole leaf. The flux taken back from a split leaf is therefore given out again in full: its
-// pieces are scaled to share the factor it had received (by area where the back end gave none of them anything), and
-// the balance holds through splits. Before, only the pieces of reshaped leaves and overlapping surfaces were: a rug
-// laid on the floor of a closed room lost 6.2 % of the emitted flux in its lamp's four shots, a box standing on the
-// floor made 3.6e-6 out of nothing, stairs against a wall 3.5e-5 (tests SolverEnergy.*ThroughSplits).
+// (a rug laid on a floor), the pixels along the edges of the one in front hold pieces of both, walked by their
+// coverages; and where surfaces meet inside a pixel and one runs on behind the other (the floor under a box standing
+// on it, a wall behind stairs or a lamp touching it), the AA hemicube's layer rule (formfactor/coverage_list.h) walks
+// the pixel side by side or front to back depending on the coverages of the leaves there, and the leaves that were
+// not split keep what they got beside the whole leaf. The flux taken back from a split leaf is therefore given out
+// again in full: its pieces are scaled to share the factor it had received (by area where the back end gave none of
+// them anything), and the balance holds through splits. Before, only the pieces of reshaped leaves and overlapping
+// surfaces were: a rug laid on the floor of a closed room lost 6.2 % of the emitted flux in its lamp's four shots, a
+// box standing on the floor made 3.6e-6 out of nothing, stairs against a wall 3.5e-5 (tests
+// SolverEnergy.*ThroughSplits).
 //
 // One case is better served otherwise. In a shot's own substructuring (keep_reshaped), a leaf every piece of which
 // that got anything was reshaped by the near-field correction holds the factor from its centroid, while each piece

@@ -259,8 +259,9 @@ TEST(FormfactorCoverageList, ArenaKeepsAGroupWholeWhenAnotherSurfaceLiesBetweenI
 }
 
 // The list rules, written out plainly over groups: an entry joins its surface's group (after its last piece),
-// or starts a group before the first group whose head lies behind it (or at its depth, of a higher surface); a group whose coverages reach the pixel
-// drops the groups behind it, and a covered list refuses new groups behind them all. Random arrivals, with runs
+// or starts a group before the first group whose head lies behind it (or at its depth, of a higher surface); a
+// group whose coverages reach the pixel drops the groups behind it, and a covered list refuses new groups behind
+// them all. Random arrivals, with runs
 // of one surface (the arena's shortcut for the group that took the last entry) and without.
 TEST(FormfactorCoverageList, ArenaListsFollowTheGroupRulesWhateverTheArrivals) {
   struct Group {
