@@ -255,8 +255,10 @@ class Solver {
   // the caller gives back to the shooter (see solver.cpp).
   double share_out_split_factors(mesh::NodeId first_new, bool keep_reshaped);
   // Moves the shooter's earlier shots (history_flux_) among the pieces of each leaf split since it last shot, by
-  // their factors of this shot in ff_ (see solver.cpp).
-  void share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors);
+  // their factors of this shot in ff_ (see solver.cpp). `received`: the flux of this shot when the pieces already
+  // hold their share of it (in the shot's own substructuring), which a piece keeps whatever it gives back.
+  void share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors,
+                         const Rgb& received = Rgb{});
   // Makes luminance_ and largest_reflected_ current for the receiver view (and deposits_ with them).
   void update_luminance();
   // Rebuilds deposits_ when the receiver view changed.

@@ -570,6 +570,53 @@ void expect_cube_references_in_fewer_shots(const SolverOptions& faster, const ch
   EXPECT_LT(accelerated.shots(), plain.shots());
 }
 
+// A piece made in a shot's own substructuring holds its share of the shot, which a later round takes back in full
+// should it split again (take_back_split_shares). Moving the shooter's earlier shots among the pieces
+// (share_out_history) let a piece give away part of that share: its own pieces then lost more than they had. A
+// 6 x 3 x 6 room, a 0.8 x 0.8 lamp (emission 10) cut out of its ceiling, and a one-sided plate 3 x 3 a thousandth
+// under the lamp, facing it: after 15 shots, 5 ceiling and plate leaves were below 0, down to -0.031 (-0.051 after
+// 25). A piece now gives away at most what it has over its emission and its share of the shot.
+TEST(SolverHistory, APieceSplitAgainInItsShotKeepsWhatItTakesBack) {
+  Scene scene;
+  scene.name = "plate-under-a-lamp";
+  const auto white = scene.add_material({"white", Rgb(0.6), Rgb(0.0)});
+  const auto lamp = scene.add_material({"lamp", Rgb(0.5), Rgb(10.0)});
+  // Faces as an OBJ file would give them (the first corner of a face decides its grid).
+  const auto face = [&](std::uint32_t group, std::uint32_t material, std::vector<Vec3> corners) {
+    scene.add_face(group, material, std::move(corners));
+  };
+  face(scene.add_group("floor"), white, {{0, 0, 0}, {0, 0, 6}, {6, 0, 6}, {6, 0, 0}});
+  const std::uint32_t ceiling = scene.add_group("ceiling");  // around the lamp's hole, facing down
+  face(ceiling, white, {{0, 3, 0}, {6, 3, 0}, {6, 3, 2.2}, {0, 3, 2.2}});
+  face(ceiling, white, {{0, 3, 3}, {6, 3, 3}, {6, 3, 6}, {0, 3, 6}});
+  face(ceiling, white, {{0, 3, 2.2}, {2.2, 3, 2.2}, {2.2, 3, 3}, {0, 3, 3}});
+  face(ceiling, white, {{3, 3, 2.2}, {6, 3, 2.2}, {6, 3, 3}, {3, 3, 3}});
+  face(scene.add_group("x0"), white, {{0, 0, 0}, {0, 3, 0}, {0, 3, 6}, {0, 0, 6}});
+  face(scene.add_group("x6"), white, {{6, 0, 0}, {6, 0, 6}, {6, 3, 6}, {6, 3, 0}});
+  face(scene.add_group("z0"), white, {{0, 0, 0}, {6, 0, 0}, {6, 3, 0}, {0, 3, 0}});
+  face(scene.add_group("z6"), white, {{0, 0, 6}, {0, 3, 6}, {6, 3, 6}, {6, 0, 6}});
+  face(scene.add_group("lamp"), lamp, {{2.2, 3, 2.2}, {3, 3, 2.2}, {3, 3, 3}, {2.2, 3, 3}});
+  face(scene.add_group("plate"), white, {{1.5, 2.999, 1.5}, {1.5, 2.999, 4.5}, {4.5, 2.999, 4.5}, {4.5, 2.999, 1.5}});
+  scene.build_surfaces();
+  ASSERT_TRUE(scene.coplanar_overlaps().empty());
+  SolverOptions options;
+  options.converge = 0.0;
+  options.max_shots = 15;
+  options.meshing = default_meshing(scene);  // as `aarad solve` meshes it
+  Solver solver(scene, options);
+  solver.run();
+  ASSERT_GT(solver.splits(), 0);
+  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+  for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
+    const Rgb& b = solver.hierarchy().radiosity(leaf);
+    lowest = std::min({lowest, b.r, b.g, b.b});
+    highest = std::max({highest, b.r, b.g, b.b});
+  }
+  std::printf("plate a thousandth under a lamp: %zu leaves, radiosities %.3g to %.3g\n",
+              solver.hierarchy().leaf_count(), lowest, highest);
+  EXPECT_GE(lowest, -1e-12 * highest);
+}
+
 TEST(SolverRelaxation, ClosedUnitCubeReachesTheReferenceRadiositiesInFewerShots) {
   SolverOptions options = one_patch_per_face(16);
   options.relaxation = 1.3;
