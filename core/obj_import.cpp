@@ -681,8 +681,9 @@ std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const
 }
 
 // Faces laid on one another in one plane (a rug on a floor, a face copied into a second group): both are lit
-// there and both count the area, where in the real scene one hides the other. The hemicubes show the surface made
-// first (the lower id: formfactor/coverage_list.h, "Equal keys").
+// there and both count the area, where in the real scene one hides the other. Which one the hemicubes show is not
+// named: the surface made first where their depth keys are equal (formfactor/coverage_list.h, "Equal keys"), but
+// where the planes differ by a rounding (a turned room), either, pixel by pixel.
 void warn_about_overlaps(const Scene& scene, const std::string& path, std::vector<std::string>& warnings) {
   constexpr std::size_t kMostWarnings = 10;
   // n copies of one face overlap in n (n - 1) / 2 pairs: 16 000 of them, a 300 KB file, took 8 GB and a minute to
@@ -703,12 +704,10 @@ void warn_about_overlaps(const Scene& scene, const std::string& path, std::vecto
           path, o.line_a, "faces of " + name(o.a) + " overlap each other over " + amount + " (" + lines +
                               " overlap most): that area is lit and counted twice; remove the overlap"));
     } else {
-      const std::string shown = scene.groups[scene.surfaces[std::min(o.a, o.b)].group].name;
       warnings.push_back(InputError::format(
           path, o.line_a, name(o.a) + " and " + name(o.b) + " lie on one another in one plane over " + amount +
                               " (" + lines + " overlap most): both are lit there and both count that area, where "
-                              "one would hide the other, and the hemicubes show '" + shown + "' (it comes first); "
-                              "cut one out of the other, or move one off the plane"));
+                              "one would hide the other; cut one out of the other, or move one off the plane"));
     }
   }
   std::string more;
