@@ -822,12 +822,7 @@ class StagedCoverageArena {
     if (!(entry.depth < depth_[pixel])) [[unlikely]] {
       // Behind the nearest full entry: dropped, but for a partial entry whose range reaches into the full entry's,
       // and a full entry at its very key that is in front of it by the rule of equal keys.
-      if (entry.coverage < kFullCoverage) {
-        stage_behind_full(x, pixel, entry);
-      } else if (entry.depth == depth_[pixel] &&
-                 in_front_at_equal_key(entry.surface, receiver_meta_[receiver_[pixel]].surface)) {
-        receiver_[pixel] = entry.receiver;
-      }
+      offer_behind_full(x, pixel, entry);
       return;
     }
     if (entry.coverage >= kFullCoverage) {
@@ -898,10 +893,16 @@ class StagedCoverageArena {
     const auto block = static_cast<std::size_t>(x) >> block_shift_;
     stage_[block].push_back(Staged{entry, static_cast<std::uint32_t>(pixel - block * block_pixels_)});
   }
-  // Out of line and cold: few partial entries arrive behind a full entry, and the insertion stays as small as the
-  // z-buffer's test in the rasterizer's loop (inline, the test cost 5 % of the office's instructions).
-  [[gnu::noinline, gnu::cold]] void stage_behind_full(int x, std::size_t pixel, const CoverageEntry& entry) {
-    if (!CoverageArena::hidden_by_full(full_entry(pixel), entry)) stage(x, pixel, entry);
+  // Out of line and cold: few partial entries arrive behind a full entry, and fewer full entries at its very key, and
+  // the insertion stays as small as the z-buffer's test in the rasterizer's loop (inline, the test cost 5 % of the
+  // office's instructions).
+  [[gnu::noinline, gnu::cold]] void offer_behind_full(int x, std::size_t pixel, const CoverageEntry& entry) {
+    if (entry.coverage < kFullCoverage) {
+      if (!CoverageArena::hidden_by_full(full_entry(pixel), entry)) stage(x, pixel, entry);
+    } else if (entry.depth == depth_[pixel] &&
+               in_front_at_equal_key(entry.surface, receiver_meta_[receiver_[pixel]].surface)) {
+      receiver_[pixel] = entry.receiver;
+    }
   }
 
   std::vector<double> depth_;            // per pixel: depth of the nearest full entry, kFar when none
