@@ -545,6 +545,10 @@ std::vector<Scene::CoplanarOverlap> Scene::coplanar_overlaps(std::size_t most_pa
         o.line_b = share.line_b;
       }
     }
+    // The shares are areas in the projection that drops the first surface's dominant axis k, |n_k| times the areas
+    // in the plane: a rug on the floor of a room turned off the axes was reported over 87 % of its area.
+    const Vec3& n = surfaces[a].plane.normal;
+    o.area /= std::abs(n[dropped_axis(n)]);
     if (o.area > 1e-6 * std::min(surfaces[a].area, surfaces[b].area)) found.push_back(o);
   }
   return found;
