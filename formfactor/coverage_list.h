@@ -514,9 +514,9 @@ double resolve_front_to_back(std::span<const CoverageEntry> front_to_back, Emit&
 // sorted by insertion sort, so it is one or two cache lines whatever order receivers arrive in. An entry joins
 // the group of its surface when the list has one (after its last piece), else goes in at its depth (behind
 // entries at the same depth but for those it is in front of by the rule of equal keys; positions are decided at
-// group heads only, so groups stay contiguous). A group
-// whose coverages reach kFullCoverage drops the entries behind it and the list refuses new groups behind it (but
-// for those whose depth range reaches into the group's: see "A full pixel" above).
+// group heads only, so groups stay contiguous). A group whose coverages reach kFullCoverage drops the entries behind
+// it and the list refuses new groups behind it (but for those whose depth range reaches into the group's: see "A
+// full pixel" above).
 // A group's coverage sum is its entries' coverages added front to back. The header keeps the group that took the
 // last entry (its surface, where it ends, its sum): a pixel's entries mostly arrive a surface at a time (receivers
 // come in index order, a surface's pieces mostly numbered together), and in the office 88 % of the entries that
@@ -621,8 +621,8 @@ class CoverageArena {
   void reset(std::size_t pixels);
 
   // Inserts an entry into the list of `pixel` at its depth (behind entries at the same depth, but for the rule of
-  // equal keys), or into the
-  // group of its surface when the list has one. Returns false when the pixel is full in front of it.
+  // equal keys), or into the group of its surface when the list has one. Returns false when the pixel is full in
+  // front of it.
   bool insert(std::size_t pixel, const CoverageEntry& entry) {
     ++entries_;
     if (entry.coverage >= kFullCoverage) {
@@ -893,9 +893,10 @@ class StagedCoverageArena {
     const auto block = static_cast<std::size_t>(x) >> block_shift_;
     stage_[block].push_back(Staged{entry, static_cast<std::uint32_t>(pixel - block * block_pixels_)});
   }
-  // Out of line and cold: few partial entries arrive behind a full entry, and fewer full entries at its very key, and
-  // the insertion stays as small as the z-buffer's test in the rasterizer's loop (inline, the test cost 5 % of the
-  // office's instructions).
+  // Out of line and cold, so that the insertion stays as small as the z-buffer's test in the rasterizer's loop (inline,
+  // the partial entries' test cost 5 % of the office's instructions). Every entry behind the inline one comes here,
+  // but most are full entries at another key, dropped at once; guarding the call by kind and key in the loop counted
+  // no fewer instructions (cachegrind, docs/benchmarks.md, "make goals at 8796bd2").
   [[gnu::noinline, gnu::cold]] void offer_behind_full(int x, std::size_t pixel, const CoverageEntry& entry) {
     if (entry.coverage < kFullCoverage) {
       if (!CoverageArena::hidden_by_full(full_entry(pixel), entry)) stage(x, pixel, entry);

@@ -978,10 +978,11 @@ double Solver::share_out_split_factors(mesh::NodeId first_new, bool keep_reshape
 // (test SolverHistory.*). Shooters that never shoot again after a split leave their share inherited. A piece
 // gives back at most what it has over its emission and, in the shot's own substructuring, over its share of this
 // shot, which it must keep whole for a later round to take back should it split again (counted in, a piece gave
-// some of it away, its pieces then lost the whole of it, and a ceiling 0.01 over a plate ended at -0.02 where the
-// lamp sent 10: test SolverHistory.APieceSplitAgainInItsShotKeepsWhatItTakesBack): where this shot's factors are not
-// those of the earlier shots (the near-field correction's scale changes a little with the receivers), a leaf's
-// changes are scaled down together.
+// some of it away, its pieces then lost the whole of it, and under a lamp of emission 10 a plate a thousandth below
+// it and the ceiling round it had leaves down to -0.031: test
+// SolverHistory.APieceSplitAgainInItsShotKeepsWhatItTakesBack). Where this shot's factors are not those of the
+// earlier shots (the near-field correction's scale changes a little with the receivers), a leaf's changes are
+// scaled down together.
 void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<const mesh::NodeId> ancestors,
                                const Rgb& received) {
   if (pieces.empty()) return;
@@ -1004,7 +1005,7 @@ void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<
     // What the piece has of the earlier shots: its B but for its emission and its share of this shot, which a
     // later round of this substructuring may take back in full (take_back_split_shares) when it splits.
     const Rgb available = hierarchy_.radiosity(piece) - material(piece).emission -
-                          material(piece).reflectance * (received * (ff_[pieces[k]] / area));
+                          material(piece).reflectance * (received * (std::max(0.0, ff_[pieces[k]]) / area));
     double& part = share_scale_[slot];
     part = lowest_part(available.r, delta.r, part);
     part = lowest_part(available.g, delta.g, part);
@@ -1064,7 +1065,7 @@ void Solver::substructure(mesh::NodeId shooter, const Rgb& shot_flux) {
     }
     if (returned != 0.0) hierarchy_.unshot(shooter) += shot_flux * (returned / hierarchy_.area(shooter));
     // The new leaves' share of the shooter's earlier shots, once their B holds this shot's own share and not the
-    // one they inherited (a piece gives back at most what it has over its emission).
+    // one they inherited (a piece gives back at most what it has over its emission and that share).
     if (!subset_.empty() && !(history_flux_ == Rgb{})) share_out_history(subset_, piece_ancestor_, shot_flux);
     // Every leaf now holds the shooter's shots by its own factors: after an exception in a later round, its next
     // shot moves the earlier shots only among the leaves made since.

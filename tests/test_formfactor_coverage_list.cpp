@@ -323,8 +323,9 @@ TEST(FormfactorCoverageList, ArenaListsFollowTheGroupRulesWhateverTheArrivals) {
 
 TEST(FormfactorCoverageList, AFullEntryAtThePartialEntrysDepthHidesItOrNotWhateverTheOrder) {
   // A partial entry at exactly the depth of a full one of another surface is in front of it when its surface is the
-  // lower (the rule of equal keys), else hidden: offered after the full entry it is refused, so offered before it
-  // it must be dropped too, and the full receiver takes the whole pixel either way.
+  // lower (the rule of equal keys): it takes its coverage and the full receiver the rest, whatever the order. Else it
+  // is hidden: offered after the full entry it is refused, offered before it it is dropped, and the full receiver
+  // takes the whole pixel either way.
   for (const std::uint32_t partial_surface : {1u, 3u}) {
     for (const bool partial_first : {true, false}) {
       CoverageArena arena;
