@@ -203,6 +203,17 @@ TEST(SolverEnergy, ClosedRoomWithARugInTheFloorsPlaneLosesNoLightThroughSplits) 
   EXPECT_LT(std::abs(escaped), 1e-9);
 }
 
+// The smallest and the largest radiosity of any leaf, over the three channels.
+std::pair<double, double> leaf_radiosity_range(const Solver& solver) {
+  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+  for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
+    const Rgb& b = solver.hierarchy().radiosity(leaf);
+    lowest = std::min({lowest, b.r, b.g, b.b});
+    highest = std::max({highest, b.r, b.g, b.b});
+  }
+  return {lowest, highest};
+}
+
 // A lamp laid on a ceiling (the import warns of it), and a one-sided plate 0.01 under the lamp, facing it
 // (data/limits/plate_under_lamp.obj). The lamp and the ceiling have the same depth key in every pixel they share;
 // the hemicubes showed whichever receiver came first, and the pieces of a lamp leaf split by a plate patch's shot,
@@ -220,12 +231,7 @@ TEST(SolverEnergy, APlateUnderALampLaidOnTheCeilingGetsNoNegativeLight) {
   ASSERT_GT(solver.splits(), 0);
   // Nothing can exceed the lamp's emission plus what it reflects of the most the room could send it, 10 / (1 - 0.6)
   // times its reflectance: 10 + 0.5 x 25 = 22.5 (measured: 0 to 10).
-  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
-  for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
-    const Rgb& b = solver.hierarchy().radiosity(leaf);
-    lowest = std::min({lowest, b.r, b.g, b.b});
-    highest = std::max({highest, b.r, b.g, b.b});
-  }
+  const auto [lowest, highest] = leaf_radiosity_range(solver);
   std::printf("plate under a lamp laid on the ceiling: %zu leaves, radiosities %.3g to %.3g\n",
               solver.hierarchy().leaf_count(), lowest, highest);
   EXPECT_GE(lowest, -1e-12 * highest);
@@ -606,12 +612,7 @@ TEST(SolverHistory, APieceSplitAgainInItsShotKeepsWhatItTakesBack) {
   Solver solver(scene, options);
   solver.run();
   ASSERT_GT(solver.splits(), 0);
-  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
-  for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
-    const Rgb& b = solver.hierarchy().radiosity(leaf);
-    lowest = std::min({lowest, b.r, b.g, b.b});
-    highest = std::max({highest, b.r, b.g, b.b});
-  }
+  const auto [lowest, highest] = leaf_radiosity_range(solver);
   std::printf("plate a thousandth under a lamp: %zu leaves, radiosities %.3g to %.3g\n",
               solver.hierarchy().leaf_count(), lowest, highest);
   EXPECT_GE(lowest, -1e-12 * highest);
