@@ -100,7 +100,7 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
 
 void run_formfactors(const FormFactorsOptions& options) {
   const Scene scene = load_scene(options.scene);
-  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", printable(warning).c_str());
+  print_scene_warnings(scene);
   const std::optional<std::uint32_t> from = scene.find_group(options.from);
   if (!from) {
     std::string known;

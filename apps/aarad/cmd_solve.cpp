@@ -227,9 +227,8 @@ void run_solve(SolveCommandOptions options) {
   }
 
   const Scene scene = load_scene(options.scene);
-  // Warnings are problems the user must see: they go to stderr even with --quiet, which silences only the
-  // progress and the summary.
-  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "aarad: warning: %s\n", printable(warning).c_str());
+  // Warnings go to stderr even with --quiet, which silences only the progress and the summary.
+  print_scene_warnings(scene);
   refine::SolverOptions solver_options = options.solver;
   solver_options.meshing = refine::default_meshing(scene);
   // A scene's sizes were chosen together: a patch or element size on the command line replaces all three, and

@@ -1,5 +1,6 @@
 #include "apps/aarad/commands.h"
 
+#include "aarad/core/error.h"
 #include "aarad/core/scene.h"
 #include "aarad/formfactor/backend.h"
 
@@ -92,6 +93,11 @@ CLI::Validator whole_number_in(long long low, long long high) {
         return {};
       },
       wanted);
+}
+
+void print_scene_warnings(const Scene& scene) {
+  for (const std::string& warning : scene.warnings)
+    std::fprintf(stderr, "aarad: warning: %s\n", printable(warning).c_str());
 }
 
 void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFactorBackend& backend) {

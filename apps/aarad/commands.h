@@ -33,6 +33,10 @@ CLI::Validator number_in(double low, End low_end, double high, End high_end);
 inline constexpr long long kNoLimit = std::numeric_limits<long long>::max();
 CLI::Validator whole_number_in(long long low, long long high = kNoLimit);
 
+// Prints the scene's warnings on stderr, one line each, control characters shown as \xNN (printable): they are
+// problems the user must see, so they go out even with --quiet.
+void print_scene_warnings(const Scene& scene);
+
 // Warns on stderr when `backend` ignores visibility and surfaces of `scene` can hide one another: its result
 // then has no shadows.
 void warn_if_visibility_is_ignored(const Scene& scene, const formfactor::FormFactorBackend& backend);
