@@ -26,6 +26,7 @@ struct FactorRow {
   std::vector<mesh::NodeId> near_nodes;
   std::vector<double> near_unoccluded;
   std::size_t node_count = 0;  // the hierarchy's node count then: nodes made since have larger ids
+  int samples = 1;             // the shot's points per side (Solver::compute_form_factors)
   std::uint64_t last_use = 0;
 };
 

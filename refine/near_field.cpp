@@ -3,6 +3,7 @@
 #include "aarad/refine/near_field.h"
 
 #include "aarad/core/polygon.h"
+#include "aarad/core/quadrature.h"
 #include "aarad/formfactor/analytic.h"
 #include "aarad/formfactor/hemicube_geometry.h"
 
@@ -15,6 +16,13 @@ namespace {
 // A receiver is corrected when its radius is at most this times the shooting patch's size: its radius, or its width
 // when that is smaller (patch_extent).
 constexpr double kSmaller = 0.75;
+// A receiver too large to be corrected from its centroid is corrected from points over the patch: 2 x 2 Gauss points
+// in each of 1, 2 x 2, 4 x 4 ... cells, up to kPatchLevels rules, until two rules in a row agree to kPatchAgree.
+// A back end that shot from kFinePoints points or more has averaged over the patch already, finer than that and
+// with what each point sees: its factors of large receivers stand.
+constexpr int kPatchLevels = 4;
+constexpr std::size_t kFinePoints = 64;
+constexpr double kPatchAgree = 0.01;
 // The far receivers of a shot are scaled by at most this factor (or its inverse) to keep the shot's total.
 constexpr double kFarChange = 1.25;
 
@@ -77,6 +85,24 @@ double patch_extent(std::span<const Vec3> polygon, double radius) {
 }
 
 }  // namespace
+
+double NearFieldCorrection::patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon) {
+  const auto rule = [&](int level) {
+    std::vector<AreaSample>& points = patch_points_[static_cast<std::size_t>(level)];
+    if (points.empty()) points = polygon_quadrature(shooter.polygon, 2, 1 << level);
+    double sum = 0.0;
+    for (const AreaSample& point : points)
+      sum += point.weight * unoccluded_factor(point.position, shooter.normal, polygon, local_, clipped_);
+    return sum;
+  };
+  double coarse = rule(0);
+  for (int level = 1; level < kPatchLevels; ++level) {
+    const double fine = rule(level);
+    if (std::abs(fine - coarse) <= kPatchAgree * fine) return fine;
+    coarse = fine;
+  }
+  return coarse;
+}
 
 void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span<const double> radii) {
   patch_centroid_.assign(centroids.begin(), centroids.end());
@@ -151,15 +177,25 @@ std::span<const std::uint8_t> NearFieldCorrection::candidates(const NearFieldSho
 
 void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<double> ff) {
+  shape(shooter, receivers, subset, ff);
+  write(subset, ff);
+}
+
+void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
+                                std::span<const std::uint32_t> subset, std::span<const double> ff) {
   near_.clear();
   shaped_.clear();
   const bool whole_shot = subset.empty();
   if (whole_shot) {
     scale_ = 1.0;
     far_scale_ = 1.0;
+    far_refused_ = false;
+    near_back_end_ = 0.0;
+    shot_total_ = 0.0;
   }
   if (!(reach_ > 0.0) || !(shooter.area > 0.0)) return;
   const double radius = mark_near_patches(shooter);
+  patch_points_.assign(kPatchLevels, {});
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
   const double size = patch_extent(shooter.polygon, radius);
@@ -184,7 +220,8 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
     // better than the patch's centroid stands for the patch.
     double receiver_radius = 0.0;
     for (const Vec3& corner : polygon) receiver_radius = std::max(receiver_radius, glm::length(corner - centroid));
-    if (!(receiver_radius <= kSmaller * size)) continue;
+    const bool small = receiver_radius <= kSmaller * size;
+    if (!small && (shooter.points.size() >= kFinePoints)) continue;
     // What the back end saw of the receiver: its factor over the factor it would have had with nothing in front.
     double unoccluded = 0.0;
     if (!shooter.unoccluded.empty()) {
@@ -194,6 +231,16 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
         unoccluded += shooter.weights[p] * unoccluded_factor(shooter.points[p], shooter.normal, polygon, local_, clipped_);
     }
     const double seen = unoccluded > 0.0 ? std::min(1.0, ff[i] / unoccluded) : 1.0;
+    if (!small) {
+      // A receiver as large as the patch or larger: the patch's own points stand for it better than one point of
+      // either, so the factor with nothing occluding is averaged over the patch.
+      const double from_patch = patch_average(shooter, polygon);
+      near_.push_back(i);
+      shaped_.push_back(seen * from_patch);
+      back_end_total += ff[i];
+      shaped_total += shaped_.back();
+      continue;
+    }
     // A receiver crossing the patch's plane (a wall through a shelf's plane): only its part in front of the patch
     // sees it, and that part's centroid stands for it. The receiver's own centroid may lie behind the patch
     // (which it then does not see at all) or just in front of it, at the junction, where the factor is largest.
@@ -226,14 +273,21 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
     // what the patch sees: its total is then kept instead, and the far receivers are left alone).
     double shot_total = 0.0;
     for (double f : ff) shot_total += f > 0.0 ? f : 0.0;
+    near_back_end_ = back_end_total;
+    shot_total_ = shot_total;
     const double far_before = shot_total - back_end_total, far_after = shot_total - shaped_total;
     const double far_scale = far_before > 0.0 ? far_after / far_before : 0.0;
     if (far_scale >= 1.0 / kFarChange && far_scale <= kFarChange) {
       far_scale_ = far_scale;
     } else {
       scale_ = back_end_total / shaped_total;
+      far_refused_ = true;
     }
   }
+}
+
+void NearFieldCorrection::write(std::span<const std::uint32_t> subset, std::span<double> ff) {
+  const bool whole_shot = subset.empty();
   near_flag_.resize(ff.size(), 0);
   for (std::size_t k = 0; k < near_.size(); ++k) {
     ff[near_[k]] = scale_ * shaped_[k];

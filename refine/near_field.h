@@ -27,19 +27,26 @@
 // seen edge on through the bottom row of a side face, about half its factor: the cosine kernel, zero at the
 // horizon, varies by a factor of two across that row).
 //
+// A near receiver too large for its centroid to stand for it (a box's top just under a lamp, larger than the lamp)
+// is shaped from the patch's side instead: G_e = v_e times the mean over the patch of F(dA_p -> e), the exact factor
+// from points p of the patch, by 2 x 2 Gauss points in 1, 4, 16 and 64 cells until two rules agree to 1 % (unless
+// the back end shot from 8 x 8 points or more, whose factors are as fine and occluded point by point).
+//
 // Energy. The shot's total stays what the back end sent (a closed scene stays balanced to the bit). The near
 // field's total changes (a unit floor patch sends 0.2000 to the unit wall it meets; its centroid, 0.1901), and
 // the far receivers, whose factors the centroid gives well one by one, take up the difference all in the same
 // proportion: in a closed scene the patch's factors add up to 1, so what the centroid gave the near field too
 // little it gave the far field too much. When that would change the far field by more than a quarter (a patch
 // that sees mostly its near field), the near receivers are instead scaled to the total the back end gave them,
-// and the far ones are left alone. Receivers added by substructuring in the same shot are scaled like those of
+// and the far ones are left alone; far_refused() says so, and the solver then shoots again from more points over
+// the patch (Solver::area_shooters). Receivers added by substructuring in the same shot are scaled like those of
 // the whole shot; the solver then scales the pieces of each split receiver so that they share what it had
 // received, except where every piece was reshaped here: those keep their own factors, and the shooter keeps the
 // difference as unshot flux (refine/solver.cpp). Either way the balance holds through splits.
 #pragma once
 
 #include "aarad/core/math.h"
+#include "aarad/core/quadrature.h"
 #include "aarad/formfactor/backend.h"
 
 #include <cstdint>
@@ -84,6 +91,19 @@ class NearFieldCorrection {
   // sets the scale that later subsets of the same shot use). ff holds the back end's factors from the shooter.
   void apply(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
              std::span<const std::uint32_t> subset, std::span<double> ff);
+  // apply() in two steps: shape() finds the near receivers and their new factors, and for a whole shot the scales,
+  // reading ff only; write() then rewrites ff with them. Between the two, far_refused() tells whether the shot's
+  // point could stand for the patch.
+  void shape(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
+             std::span<const std::uint32_t> subset, std::span<const double> ff);
+  void write(std::span<const std::uint32_t> subset, std::span<double> ff);
+  // Whether the last whole shot's far receivers could not take up its near field's change (more than kFarChange,
+  // near_field.cpp): the near field then keeps the back end's total, and the points shot from saw too little of the
+  // rest of the scene to stand for the patch.
+  bool far_refused() const { return far_refused_; }
+  // The last whole shot's total of the back end's factors, and their total over its near receivers.
+  double shot_total() const { return shot_total_; }
+  double near_back_end_total() const { return near_back_end_; }
 
   // Receivers the last apply() corrected.
   std::span<const std::uint32_t> last_corrected() const { return near_; }
@@ -96,6 +116,8 @@ class NearFieldCorrection {
   double reach_;
   double scale_ = 1.0;
   double far_scale_ = 1.0;
+  bool far_refused_ = false;
+  double near_back_end_ = 0.0, shot_total_ = 0.0;
   std::vector<Vec3> patch_centroid_;
   std::vector<double> patch_radius_;
   // Flags the patches that may hold a near receiver of a shot from `shooter` (all, without a table of patches);
@@ -129,6 +151,10 @@ class NearFieldCorrection {
   std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)
   std::vector<double> shaped_;  // per near receiver: G
   std::vector<Vec3> local_, clipped_, front_;
+  // The factor with nothing occluding from the patch to `polygon`, averaged over the patch by ever finer rules.
+  double patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon);
+  // The rules over the shooting patch, by level, each made when a large receiver first needs it.
+  std::vector<std::vector<AreaSample>> patch_points_;
 };
 
 }  // namespace aarad::refine

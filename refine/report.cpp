@@ -65,6 +65,7 @@ nlohmann::json make_report(const Solver& solver, const std::vector<mesh::Violati
       {"splits", solver.splits()},
       {"element_limit_reached", solver.element_limit_reached()},
       {"reused_shots", solver.reused_shots()},
+      {"area_shooters", solver.area_shooters()},
       {"seconds",
        {{"total", total},
         {"form_factors", solver_times.form_factors},

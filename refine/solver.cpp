@@ -43,41 +43,12 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-struct SamplePoint {
-  Vec3 position;
-  double weight;  // fraction of the patch's area; the weights sum to 1
-};
-
-// n x n quadrature points over a triangle (collapsed square) or a quadrilateral (bilinear map).
-std::vector<SamplePoint> patch_samples(const std::vector<Vec3>& corners, int n) {
-  std::vector<double> nodes, weights;
-  gauss_legendre(n, nodes, weights);
-  std::vector<SamplePoint> samples;
-  double total = 0.0;
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) {
-      const double u = nodes[static_cast<std::size_t>(i)];
-      const double v = nodes[static_cast<std::size_t>(j)];
-      const double w = weights[static_cast<std::size_t>(i)] * weights[static_cast<std::size_t>(j)];
-      Vec3 p;
-      double jacobian;
-      if (corners.size() == 3) {
-        p = corners[0] + u * (corners[1] - corners[0]) + u * v * (corners[2] - corners[1]);
-        jacobian = u * glm::length(glm::cross(corners[1] - corners[0], corners[2] - corners[1]));
-      } else {
-        p = (1 - u) * (1 - v) * corners[0] + u * (1 - v) * corners[1] + u * v * corners[2] + (1 - u) * v * corners[3];
-        const Vec3 du = (1 - v) * (corners[1] - corners[0]) + v * (corners[2] - corners[3]);
-        const Vec3 dv = (1 - u) * (corners[3] - corners[0]) + u * (corners[2] - corners[1]);
-        jacobian = glm::length(glm::cross(du, dv));
-      }
-      samples.push_back({p, w * jacobian});
-      total += w * jacobian;
-    }
-  }
-  if (total > 0.0) {
-    for (SamplePoint& s : samples) s.weight /= total;
-  }
-  return samples;
+// The points per side to try after `samples` when they could not stand for the patch (compute_form_factors); 0
+// when there are no more to try.
+int more_area_points(int samples) {
+  if (samples < 3) return 3;
+  if (samples < 5) return 5;
+  return 0;
 }
 
 // The largest factor cache (SolverOptions::factor_cache_mib), a pebibyte: its size in bytes fits any size_t.
@@ -186,6 +157,8 @@ void Solver::initialise() {
   received_factor_.assign(nodes, 0.0);
   shot_so_far_.assign(nodes, Rgb{});
   nodes_after_shot_.assign(nodes, 0);
+  area_samples_.assign(nodes, 0);
+  area_shooters_ = 0;
   // The near-field correction's table of patches, by patch id (the receivers' patch ids are the patches' nodes).
   mesh::NodeId last_patch = 0;
   for (mesh::NodeId patch : hierarchy_.patches()) last_patch = std::max(last_patch, patch);
@@ -279,100 +252,144 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   const Vec3 lift = normal * shooter_lift_;
   const Vec3 centroid = hierarchy_.centroid(shooter);
   const std::vector<Vec3> corners = hierarchy_.corners(shooter);
-  // The points the back end shoots from, with their weights.
+  const bool near_field = near_field_.reach() > 0.0;
+  // The points per side the shot is made from (a subset's are those of its whole shot): the options', or those
+  // chosen for a patch whose centroid could not stand for it.
+  if (subset.empty()) shot_samples_ = area_samples_[shooter] != 0 ? area_samples_[shooter] : options_.shooter_samples;
+  double previous_near = -1.0;  // the near field's back-end total from the previous points tried in this shot
+  int previous_samples = shot_samples_;
   std::vector<Vec3> points;
   std::vector<double> weights;
-  if (options_.shooter_samples <= 1) {
-    points.push_back(centroid + lift);
-    weights.push_back(1.0);
-  } else {
-    for (const SamplePoint& sample : patch_samples(corners, options_.shooter_samples)) {
-      points.push_back(sample.position + lift);
-      weights.push_back(sample.weight);
-    }
-  }
-  NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), points, weights, {}};
-  const bool near_field = near_field_.reach() > 0.0;
-  // A whole shot from a patch whose last whole shot is kept shoots only into the leaves split since.
-  const FactorRow* row = subset.empty() ? factor_cache_.find(shooter, &hierarchy_.impl()) : nullptr;
-  // With the near-field correction, the back end keeps the unoccluded factors of the receivers it may correct
-  // (taken into `into`, which is left empty when the back end has none). A reused shot lists those candidates on a
-  // second thread while this one reads the row (with the row's unoccluded factors, dropped below when the back end
-  // keeps none).
-  std::span<const std::uint8_t> candidates;
-  const auto list_candidates = [&] { candidates = near_field_.candidates(near, cache_.view()); };
-  std::span<const std::uint32_t> shot = subset;
-  if (row != nullptr) {
-    if (near_field) row_task_->run(list_candidates);
-    try {
-      shot = factors_from_row(*row, near_field);
-    } catch (...) {
-      row_task_->wait();
-      throw;
-    }
-    row_task_->wait();
-    ++reused_shots_;
-  } else if (near_field) {
-    list_candidates();
-  }
-  bool kept = near_field && backend_->keep_unoccluded(candidates);
-  const auto take_unoccluded = [&](std::vector<double>& into) {
-    into.assign(ff_.size(), 0.0);
-    if (!backend_->add_unoccluded(into)) into.clear();
-  };
-  if (row == nullptr || !shot.empty()) {
-    // The unoccluded factors of `shot`: into unoccluded_, or beside the row's there.
-    std::vector<double>& shot_unoccluded = row != nullptr ? unoccluded_shot_ : unoccluded_;
-    if (points.size() == 1) {
-      backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), shot, ff_);
-      if (kept) take_unoccluded(shot_unoccluded);
+  const FactorRow* row = nullptr;
+  std::span<const std::uint32_t> shot;  // the receivers the back end shoots into (all when empty)
+  while (true) {
+    // The points the back end shoots from, with their weights.
+    points.clear();
+    weights.clear();
+    if (shot_samples_ <= 1) {
+      points.push_back(centroid + lift);
+      weights.push_back(1.0);
     } else {
-      ff_sample_.assign(ff_.size(), 0.0);
-      const auto for_each_receiver = [&](auto&& body) {
-        if (shot.empty()) {
-          for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
-        } else {
-          for (std::uint32_t i : shot) body(i);
-        }
-      };
-      for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
-      if (kept) shot_unoccluded.assign(ff_.size(), 0.0);
-      for (std::size_t p = 0; p < points.size(); ++p) {
-        backend_->compute(formfactor::Shooter::from_normal(points[p], normal), cache_.view(), shot, ff_sample_);
-        for_each_receiver([&](std::uint32_t i) { ff_[i] += weights[p] * ff_sample_[i]; });
-        if (kept) {
-          take_unoccluded(unoccluded_sample_);
-          kept = !unoccluded_sample_.empty();
-          for (std::size_t i = 0; kept && i < shot_unoccluded.size(); ++i)
-            shot_unoccluded[i] += weights[p] * unoccluded_sample_[i];
-        }
+      for (const AreaSample& sample : polygon_quadrature(corners, shot_samples_)) {
+        points.push_back(sample.position + lift);
+        weights.push_back(sample.weight);
       }
     }
-    if (row != nullptr && kept && !unoccluded_shot_.empty()) {
-      for (std::uint32_t i : shot) unoccluded_[i] = unoccluded_shot_[i];
+    NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), points, weights, {}};
+    // A whole shot from a patch whose last whole shot is kept, from the same points, shoots only into the leaves
+    // split since.
+    row = subset.empty() ? factor_cache_.find(shooter, &hierarchy_.impl()) : nullptr;
+    if (row != nullptr && row->samples != shot_samples_) row = nullptr;
+    // With the near-field correction, the back end keeps the unoccluded factors of the receivers it may correct
+    // (taken into `into`, which is left empty when the back end has none). A reused shot lists those candidates on
+    // a second thread while this one reads the row (with the row's unoccluded factors, dropped below when the back
+    // end keeps none).
+    std::span<const std::uint8_t> candidates;
+    const auto list_candidates = [&] { candidates = near_field_.candidates(near, cache_.view()); };
+    shot = subset;
+    if (row != nullptr) {
+      if (near_field) row_task_->run(list_candidates);
+      try {
+        shot = factors_from_row(*row, near_field);
+      } catch (...) {
+        row_task_->wait();
+        throw;
+      }
+      row_task_->wait();
+    } else if (near_field) {
+      list_candidates();
     }
-    // The pieces of each split leaf share the factor it had (share_out_split_factors).
-    if (row != nullptr) share_out_split_factors(static_cast<mesh::NodeId>(row->node_count), false);
-  }
-  if (!kept) unoccluded_.clear();
-  // The row is kept, or patched where leaves split (a row whose leaves are all still leaves stays as it is), on
-  // another thread, from a copy of the back end's factors, while this one applies the near-field correction and
-  // makes the deposits; shoot() waits for it before anything the row reads changes.
-  const bool keep = subset.empty() && row == nullptr, update = subset.empty() && row != nullptr && !shot.empty();
-  if ((keep || update) && factor_cache_.enabled()) {
-    row_ff_.assign(ff_.begin(), ff_.end());
-    row_pending_ = true;
-    row_task_->run([this, shooter, candidates, keep] {
-      if (keep) {
-        keep_row(shooter, candidates);
+    bool kept = near_field && backend_->keep_unoccluded(candidates);
+    const auto take_unoccluded = [&](std::vector<double>& into) {
+      into.assign(ff_.size(), 0.0);
+      if (!backend_->add_unoccluded(into)) into.clear();
+    };
+    if (row == nullptr || !shot.empty()) {
+      // The unoccluded factors of `shot`: into unoccluded_, or beside the row's there.
+      std::vector<double>& shot_unoccluded = row != nullptr ? unoccluded_shot_ : unoccluded_;
+      if (points.size() == 1) {
+        backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), shot, ff_);
+        if (kept) take_unoccluded(shot_unoccluded);
       } else {
-        update_row(shooter, candidates);
+        ff_sample_.assign(ff_.size(), 0.0);
+        const auto for_each_receiver = [&](auto&& body) {
+          if (shot.empty()) {
+            for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
+          } else {
+            for (std::uint32_t i : shot) body(i);
+          }
+        };
+        for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
+        if (kept) shot_unoccluded.assign(ff_.size(), 0.0);
+        for (std::size_t p = 0; p < points.size(); ++p) {
+          backend_->compute(formfactor::Shooter::from_normal(points[p], normal), cache_.view(), shot, ff_sample_);
+          for_each_receiver([&](std::uint32_t i) { ff_[i] += weights[p] * ff_sample_[i]; });
+          if (kept) {
+            take_unoccluded(unoccluded_sample_);
+            kept = !unoccluded_sample_.empty();
+            for (std::size_t i = 0; kept && i < shot_unoccluded.size(); ++i)
+              shot_unoccluded[i] += weights[p] * unoccluded_sample_[i];
+          }
+        }
       }
-    });
-  }
-  if (near_field) {
-    near.unoccluded = unoccluded_;
-    near_field_.apply(near, cache_.view(), subset, ff_);
+      if (row != nullptr && kept && !unoccluded_shot_.empty()) {
+        for (std::uint32_t i : shot) unoccluded_[i] = unoccluded_shot_[i];
+      }
+      // The pieces of each split leaf share the factor it had (share_out_split_factors).
+      if (row != nullptr) share_out_split_factors(static_cast<mesh::NodeId>(row->node_count), false);
+    }
+    if (!kept) unoccluded_.clear();
+    if (near_field) {
+      near.unoccluded = unoccluded_;
+      near_field_.shape(near, cache_.view(), subset, ff_);
+      // The points saw too little of what lies beyond the near field to stand for the patch (a lamp just above a
+      // box, whose centroid sees the box's top over nearly all its hemicube and the rest of the room through a
+      // sliver): the shot is made again from more points over the patch (more_area_points), and the patch shoots from
+      // as many as it took from now on.
+      if (subset.empty() && area_samples_[shooter] == 0) {
+        const double near_total = near_field_.near_back_end_total();
+        const int more = more_area_points(shot_samples_);
+        if (!near_field_.far_refused() || more == 0) {
+          if (previous_near >= 0.0) area_samples_[shooter] = static_cast<std::uint8_t>(shot_samples_);
+        } else if (previous_near >= 0.0 &&
+                   std::abs(near_total - previous_near) <= kAreaPointsChange * near_field_.shot_total()) {
+          // More points changed nothing (a patch that sees little but its near field wherever it looks from):
+          // the fewer stand for it as well. The shot is made from those, as its later shots will be: a patch's
+          // shots move flux among the pieces of split leaves, and owe what they gave too much, by the factors of
+          // its next shots, which must be the same (share_out_history).
+          area_samples_[shooter] = static_cast<std::uint8_t>(previous_samples);
+          if (previous_samples > options_.shooter_samples) ++area_shooters_;
+          shot_samples_ = previous_samples;
+          ff_.assign(cache_.size(), 0.0);
+          continue;
+        } else {
+          previous_near = near_total;
+          previous_samples = shot_samples_;
+          shot_samples_ = more;
+          ff_.assign(cache_.size(), 0.0);
+          continue;
+        }
+        if (area_samples_[shooter] > options_.shooter_samples) ++area_shooters_;
+      }
+    }
+    if (row != nullptr) ++reused_shots_;
+    // The row is kept, or patched where leaves split (a row whose leaves are all still leaves stays as it is), on
+    // another thread, from a copy of the back end's factors, while this one applies the near-field correction and
+    // makes the deposits; shoot() waits for it before anything the row reads changes.
+    const bool keep = subset.empty() && row == nullptr, update = subset.empty() && row != nullptr && !shot.empty();
+    if ((keep || update) && factor_cache_.enabled()) {
+      row_ff_.assign(ff_.begin(), ff_.end());
+      row_pending_ = true;
+      row_task_->run([this, shooter, candidates, keep, samples = shot_samples_] {
+        if (keep) {
+          keep_row(shooter, candidates, samples);
+        } else {
+          update_row(shooter, candidates);
+        }
+      });
+    }
+    if (near_field) near_field_.write(subset, ff_);
+    break;
   }
   if (subset.empty() && !(history_flux_ == Rgb{})) {
     // The leaves made since the shooter's last shot (all among those a reused row shoots into), each with the
@@ -436,7 +453,7 @@ bool Solver::kept_near(std::uint32_t i, std::span<const std::uint8_t> candidates
   return row_ff_[i] > 0.0 && !unoccluded_.empty() && i < candidates.size() && candidates[i] != 0;
 }
 
-void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates) {
+void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates, int samples) {
   // Sized exactly, in the memory of the patch's previous row when it had one.
   const auto near = [&](std::uint32_t i) { return kept_near(i, candidates); };
   std::size_t count = 0, near_count = 0;
@@ -446,6 +463,7 @@ void Solver::keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candid
   }
   FactorRow row = factor_cache_.take(shooter);
   row.node_count = hierarchy_.node_count();
+  row.samples = samples;
   const auto size = [](auto& values, std::size_t n) {
     if (values.capacity() < n || values.capacity() > 2 * n) values = {};
     values.reserve(n);

@@ -177,6 +177,10 @@ class Solver {
   // Shots that took their patch's factors from its previous shot (SolverOptions::factor_cache_mib), and the
   // memory those factors take now.
   std::int64_t reused_shots() const { return reused_shots_; }
+  // Patches that shoot from points over their area since their centroid could not stand for them: the rest of the
+  // scene took up too little of what it saw to keep a shot's total once its near field was corrected
+  // (NearFieldCorrection::far_refused).
+  std::int64_t area_shooters() const { return area_shooters_; }
   std::size_t factor_cache_bytes() const { return factor_cache_.bytes(); }
 
   // Sets every inner node's B to the area-weighted mean of its children (bottom-up). run() calls it at the
@@ -206,7 +210,7 @@ class Solver {
   std::span<const std::uint32_t> factors_from_row(const FactorRow& row, bool unoccluded);
   // Keeps the back end's factors of a whole shot (row_ff_, and unoccluded_ of the near-field candidates) as the
   // shooter's row; called with the factor cache enabled.
-  void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates);
+  void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates, int samples);
   // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
   // keeping those.
   bool kept_near(std::uint32_t i, std::span<const std::uint8_t> candidates) const;
@@ -310,6 +314,14 @@ class Solver {
   // changes of B, and per ancestor's slot the part of the changes applied.
   std::vector<Rgb> shot_so_far_;
   std::vector<mesh::NodeId> nodes_after_shot_;
+  // Per node, for the patches whose centroid could not stand for them (compute_form_factors), the points per side
+  // they shoot from; 0 for the others. The points per side of the current shot, and how many patches shoot from
+  // more points than the options ask. More points are tried until the far field takes up the near field's change,
+  // or they change the near field's total by at most kAreaPointsChange of the shot.
+  static constexpr double kAreaPointsChange = 0.01;
+  std::vector<std::uint8_t> area_samples_;
+  int shot_samples_ = 1;
+  std::int64_t area_shooters_ = 0;
   Rgb history_flux_{};
   std::vector<std::uint32_t> history_pieces_;
   std::vector<mesh::NodeId> history_ancestor_;

@@ -63,10 +63,12 @@ TEST(SolverAnalytic, TwoUnitSquaresMatchReferenceRadiosities) {
 }
 
 TEST(SolverAnalytic, TwoUnitSquaresFromTheCentroidUseThePointFactor) {
-  // Shooting from the centroid (the paper's method) uses the point factor 4 B-3(0.5,0.5,1) = 0.2394565 both
-  // ways: B_1 = 1 / (1 - rho^2 F^2), B_2 = rho F B_1.
+  // Shooting from the centroid without the near-field correction (the paper's method) uses the point factor
+  // 4 B-3(0.5,0.5,1) = 0.2394565 both ways: B_1 = 1 / (1 - rho^2 F^2), B_2 = rho F B_1.
   const Scene scene = test::two_unit_squares();
-  Solver solver(scene, one_patch_per_face(1));
+  SolverOptions options = one_patch_per_face(1);
+  options.near_field = 0.0;
+  Solver solver(scene, options);
   solver.run();
   const double f = 0.2394565;
   const double b1 = 1.0 / (1.0 - 0.25 * f * f);
@@ -77,6 +79,18 @@ TEST(SolverAnalytic, TwoUnitSquaresFromTheCentroidUseThePointFactor) {
   // square leaves the scene.
   const Rgb escaped = solver.escaped_flux();
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(escaped[c], (b1 + b2) * (1.0 - f), 1e-6) << "channel " << c;
+}
+
+TEST(SolverAnalytic, TwoUnitSquaresFromTheCentroidAreCorrectedToThePatchFactor) {
+  // With the near-field correction, the other square, as large as the shooting one, is shaped from points over the
+  // shooter: the shots carry the patch-to-patch factor C-11(1,1,1) = 0.1998249, and the solution is the closed
+  // form's, B_1 = 1.01008315, B_2 = 0.10091988 (TwoUnitSquaresMatchReferenceRadiosities), not the point factor's.
+  const Scene scene = test::two_unit_squares();
+  Solver solver(scene, one_patch_per_face(1));
+  solver.run();
+  EXPECT_TRUE(solver.converged());
+  EXPECT_NEAR(leaf_radiosity_of_group(solver, "emitter").r, 1.01008315, 2e-7);
+  EXPECT_NEAR(leaf_radiosity_of_group(solver, "receiver").r, 0.10091988, 2e-7);
 }
 
 // references.md: B_floor = 1.09090910, B_ceiling = 0.18174583, B_wall = 0.18183627. Walls meet the floor at an
@@ -236,6 +250,34 @@ TEST(SolverEnergy, APlateUnderALampLaidOnTheCeilingGetsNoNegativeLight) {
               solver.hierarchy().leaf_count(), lowest, highest);
   EXPECT_GE(lowest, -1e-12 * highest);
   EXPECT_LE(highest, 22.5);
+}
+
+// A closed box hanging 0.01 under a lamp cut out of a ceiling, its top under about 40 % of the lamp
+// (data/limits/box_under_lamp.obj). Nothing there reflects more than 0.6, so no leaf of the box can exceed 0.6 times
+// the brightest radiosity in the scene (about 6.3). The lamp's centroid sees the box's top over 0.98 of its
+// hemicube, where the lamp as a whole sends it 0.39: shaped to that, the near field's change was more than the
+// sliver of room the centroid sees could take up, so the shot kept the centroid's total, and the top reached 15.1
+// (16.8 once large receivers were shaped). The lamp now shoots from points over its area (Solver::area_shooters).
+TEST(SolverEnergy, ABoxJustUnderALampReflectsNoMoreThanItReceives) {
+  const Scene scene = import_obj(std::string(AARAD_SOURCE_DIR) + "/data/limits/box_under_lamp.obj");
+  Solver solver(scene, SolverOptions{});
+  solver.run();
+  EXPECT_TRUE(solver.converged());
+  EXPECT_GE(solver.area_shooters(), 1);
+  const auto top = scene.find_group("box_top");
+  ASSERT_TRUE(top.has_value());
+  const auto [lowest, highest] = leaf_radiosity_range(solver);
+  double top_highest = 0.0, top_flux = 0.0, top_area = 0.0;
+  for (const mesh::NodeId leaf : solver.hierarchy().leaves()) {
+    if (scene.surfaces[solver.hierarchy().surface(leaf)].group != *top) continue;
+    top_highest = std::max(top_highest, solver.hierarchy().radiosity(leaf).r);
+    top_flux += solver.hierarchy().radiosity(leaf).r * solver.hierarchy().area(leaf);
+    top_area += solver.hierarchy().area(leaf);
+  }
+  std::printf("box under a lamp: %zu leaves, radiosities %.3g to %.3g, the box's top up to %.3g (mean %.3g)\n",
+              solver.hierarchy().leaf_count(), lowest, highest, top_highest, top_flux / top_area);
+  EXPECT_GE(lowest, 0.0);
+  EXPECT_LE(top_highest, 0.6 * highest);
 }
 
 // A box standing on the floor of a closed room (open at the bottom; the floor runs on under it). Along its foot a
@@ -800,13 +842,14 @@ TEST(SolverExceptions, AThrowingProgressCallbackLeavesAReadableSolution) {
 
 // A progress callback that stops the solve right after the shot that brought the unshot flux under --converge
 // has not interrupted it: the report says converged, not interrupted. Two unit squares at gap 1, one patch each,
-// shot from the centroid: after the emitter's shot the unshot fraction is rho F = 0.5 x 4 B-3(0.5,0.5,1) =
-// 0.5 x 0.2394565 (references.md).
+// shot from the centroid without the near-field correction: after the emitter's shot the unshot fraction is
+// rho F = 0.5 x 4 B-3(0.5,0.5,1) = 0.5 x 0.2394565 (references.md).
 TEST(SolverInterruptFlags, AStopAfterTheConvergingShotIsNoInterruption) {
   const Scene scene = test::two_unit_squares();
   const double unshot = 0.5 * 0.2394565;
   for (const double converge : {0.5, 0.01}) {
     SolverOptions options = one_patch_per_face(1);
+    options.near_field = 0.0;
     options.converge = converge;
     Solver solver(scene, options);
     int calls = 0;
