@@ -242,6 +242,39 @@ double Solver::net_unshot_fraction() const {
 
 Rgb Solver::ambient() const { return scan_patches().ambient; }
 
+// A patch that sees mostly its near field may see too little of the rest of the scene from its centroid to stand
+// for it: a lamp 0.01 above a box's top sees the top over 0.98 of its hemicube and the room through a sliver, where
+// the lamp as a whole sends the top 0.39. The near-field correction then refuses to hand the near field's change to
+// the far field (NearFieldCorrection::far_refused). Called after a whole shot's near field is shaped, for a patch
+// whose points are not chosen yet: returns true when the shot is to be made again from more points (set in
+// shot_samples_), until the far field takes up the change or more points change the near field's back-end total by
+// at most kAreaPointsChange of the shot (then the fewer stand for the patch as well: a box's top 0.01 under a
+// ceiling sees the ceiling from every point). The patch shoots from the points chosen from then on, and this shot
+// is made from them too: a patch's shots move flux among the pieces of split leaves, and settle what they owe, by
+// the factors of its next shots, which must be the same (share_out_history).
+bool Solver::choose_area_points(mesh::NodeId shooter, AreaPointsTrial& trial) {
+  const double near_total = near_field_.near_back_end_total();
+  const int more = more_area_points(shot_samples_);
+  const auto choose = [&](int samples) {
+    area_samples_[shooter] = static_cast<std::uint8_t>(samples);
+    if (samples > options_.shooter_samples) ++area_shooters_;
+  };
+  if (!near_field_.far_refused() || more == 0) {
+    if (trial.previous_near >= 0.0) choose(shot_samples_);
+    return false;
+  }
+  if (trial.previous_near >= 0.0 &&
+      std::abs(near_total - trial.previous_near) <= kAreaPointsChange * near_field_.shot_total()) {
+    choose(trial.previous_samples);
+    shot_samples_ = trial.previous_samples;
+    return true;
+  }
+  trial.previous_near = near_total;
+  trial.previous_samples = shot_samples_;
+  shot_samples_ = more;
+  return true;
+}
+
 void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset) {
   const auto start = Clock::now();
   const Vec3 normal = hierarchy_.plane(shooter).normal;
@@ -256,8 +289,7 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   // The points per side the shot is made from (a subset's are those of its whole shot): the options', or those
   // chosen for a patch whose centroid could not stand for it.
   if (subset.empty()) shot_samples_ = area_samples_[shooter] != 0 ? area_samples_[shooter] : options_.shooter_samples;
-  double previous_near = -1.0;  // the near field's back-end total from the previous points tried in this shot
-  int previous_samples = shot_samples_;
+  AreaPointsTrial trial{-1.0, shot_samples_};
   std::vector<Vec3> points;
   std::vector<double> weights;
   const FactorRow* row = nullptr;
@@ -342,34 +374,11 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
     if (near_field) {
       near.unoccluded = unoccluded_;
       near_field_.shape(near, cache_.view(), subset, ff_);
-      // The points saw too little of what lies beyond the near field to stand for the patch (a lamp just above a
-      // box, whose centroid sees the box's top over nearly all its hemicube and the rest of the room through a
-      // sliver): the shot is made again from more points over the patch (more_area_points), and the patch shoots from
-      // as many as it took from now on.
-      if (subset.empty() && area_samples_[shooter] == 0) {
-        const double near_total = near_field_.near_back_end_total();
-        const int more = more_area_points(shot_samples_);
-        if (!near_field_.far_refused() || more == 0) {
-          if (previous_near >= 0.0) area_samples_[shooter] = static_cast<std::uint8_t>(shot_samples_);
-        } else if (previous_near >= 0.0 &&
-                   std::abs(near_total - previous_near) <= kAreaPointsChange * near_field_.shot_total()) {
-          // More points changed nothing (a patch that sees little but its near field wherever it looks from):
-          // the fewer stand for it as well. The shot is made from those, as its later shots will be: a patch's
-          // shots move flux among the pieces of split leaves, and owe what they gave too much, by the factors of
-          // its next shots, which must be the same (share_out_history).
-          area_samples_[shooter] = static_cast<std::uint8_t>(previous_samples);
-          if (previous_samples > options_.shooter_samples) ++area_shooters_;
-          shot_samples_ = previous_samples;
-          ff_.assign(cache_.size(), 0.0);
-          continue;
-        } else {
-          previous_near = near_total;
-          previous_samples = shot_samples_;
-          shot_samples_ = more;
-          ff_.assign(cache_.size(), 0.0);
-          continue;
-        }
-        if (area_samples_[shooter] > options_.shooter_samples) ++area_shooters_;
+      // The points saw too little of what lies beyond the near field to stand for the patch: the shot is made
+      // again from more points (choose_area_points).
+      if (subset.empty() && area_samples_[shooter] == 0 && choose_area_points(shooter, trial)) {
+        ff_.assign(cache_.size(), 0.0);
+        continue;
       }
     }
     if (row != nullptr) ++reused_shots_;

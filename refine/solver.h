@@ -210,6 +210,13 @@ class Solver {
   std::span<const std::uint32_t> factors_from_row(const FactorRow& row, bool unoccluded);
   // Keeps the back end's factors of a whole shot (row_ff_, and unoccluded_ of the near-field candidates) as the
   // shooter's row; called with the factor cache enabled.
+  // The points per side a shot tried before its current ones (compute_form_factors), and the near field's back-end
+  // total from them (-1 before any).
+  struct AreaPointsTrial {
+    double previous_near;
+    int previous_samples;
+  };
+  bool choose_area_points(mesh::NodeId shooter, AreaPointsTrial& trial);
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates, int samples);
   // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
   // keeping those.

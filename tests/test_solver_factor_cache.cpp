@@ -4,6 +4,7 @@
 // shot computed afresh, to rounding.
 #include "aarad/core/builtin_scenes.h"
 #include "aarad/core/error.h"
+#include "aarad/core/obj_import.h"
 #include "aarad/formfactor/aa_hemicube.h"
 #include "aarad/refine/receiver_cache.h"
 #include "aarad/refine/solver.h"
@@ -73,6 +74,25 @@ TEST(SolverFactorCache, ReusedFactorsSolveTheCornellBoxAsFreshOnes) {
     EXPECT_GT(reusing.factor_cache_bytes(), std::size_t{1} << 20);  // more than the next test's budget
     expect_same_solution(fresh, reusing);
   }
+}
+
+// A patch that shoots from points over its area (Solver::area_shooters) keeps the points in its row, and a row from
+// other points is not reused: the lamp of data/limits/box_under_lamp.obj shoots from 5 x 5 points after its first
+// shot from the centroid, and the box's top, 0.01 under the ceiling, stays with its centroid after trying 3 x 3.
+TEST(SolverFactorCache, ReusedFactorsOfPatchesShootingFromMorePointsSolveAsFreshOnes) {
+  const Scene scene = import_obj(std::string(AARAD_SOURCE_DIR) + "/data/limits/box_under_lamp.obj");
+  SolverOptions options;
+  options.max_shots = 300;
+  options.factor_cache_mib = 0;
+  Solver fresh(scene, options);
+  fresh.run();
+  options.factor_cache_mib = 2048;
+  Solver reusing(scene, options);
+  reusing.run();
+  EXPECT_EQ(reusing.area_shooters(), 2);
+  EXPECT_EQ(fresh.area_shooters(), reusing.area_shooters());
+  EXPECT_GT(reusing.reused_shots(), 0);
+  expect_same_solution(fresh, reusing);
 }
 
 // What reuse rests on: from any point, a leaf's factor is the sum of its pieces' factors, and a leaf's factor does
