@@ -46,10 +46,11 @@ struct AreaSample {
 // Quadrature points over a planar convex polygon, their weights summing to 1: a triangle as a collapsed square, a
 // quadrilateral by its bilinear map, a larger polygon as the fan of triangles from its first corner; each of those
 // cut into cells x cells parts with n x n Gauss points in each. Empty for a polygon of no area.
-inline std::vector<AreaSample> polygon_quadrature(std::span<const Vec3> corners, int n, int cells = 1) {
+// The rule into `samples` (cleared first), whose memory is reused.
+inline void polygon_quadrature(std::span<const Vec3> corners, int n, int cells, std::vector<AreaSample>& samples) {
   std::vector<double> nodes, weights;
   gauss_legendre(n, nodes, weights);
-  std::vector<AreaSample> samples;
+  samples.clear();
   double total = 0.0;
   // The points over the unit square, mapped by `map`, which returns the point and the Jacobian there.
   const auto square = [&](auto&& map) {
@@ -85,8 +86,16 @@ inline std::vector<AreaSample> polygon_quadrature(std::span<const Vec3> corners,
   } else {
     for (std::size_t k = 1; k + 1 < corners.size(); ++k) triangle(corners[0], corners[k], corners[k + 1]);
   }
-  if (!(total > 0.0)) return {};
+  if (!(total > 0.0)) {
+    samples.clear();
+    return;
+  }
   for (AreaSample& s : samples) s.weight /= total;
+}
+
+inline std::vector<AreaSample> polygon_quadrature(std::span<const Vec3> corners, int n, int cells = 1) {
+  std::vector<AreaSample> samples;
+  polygon_quadrature(corners, n, cells, samples);
   return samples;
 }
 

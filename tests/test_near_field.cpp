@@ -698,6 +698,39 @@ double perpendicular_rectangles(double l, double w, double h) {
 // elements were corrected from their centroids, which see a strip that narrow at a tenth of its mean factor over
 // them, and the wall got 48 % of its light (52 % went to the far field); without the correction it gets 100.4 %.
 // Compared with the strip's width, the elements are too large to be corrected.
+// A receiver facing the patch 0.002 above its plane, across the patch's edge x = 1: a quarter of it lies over the
+// patch, where the factor to the patch is about 1, and the rest beyond the edge, where it is about 0. Its centroid,
+// 0.05 beyond the edge, sees the patch at a grazing angle and stands for it badly (G = 1.6e-5), so the factor is
+// averaged over the receiver. Reference: the mean of the exact point factor over the receiver by the midpoint rule,
+// 400 and 1 200 columns on the two sides of the edge by 8 rows (G = 0.0100025).
+TEST(NearField, AReceiverFacingThePatchAcrossItsEdgeCloseByIsAveragedOverItself) {
+  Junction scene;
+  const double h = 0.002;
+  const std::uint32_t plate =
+      add_surface(scene.view, {rectangle(Vec3(0.95, 0.4, h), Vec3(0, 0.2, 0), Vec3(0.2, 0, 0))}, 3, 300).front();
+  const auto mean_over = [&](double x0, double x1, int columns) {
+    double sum = 0.0;
+    for (int i = 0; i < columns; ++i) {
+      for (int j = 0; j < 8; ++j) {
+        const Vec3 point(x0 + (i + 0.5) * (x1 - x0) / columns, 0.4 + (j + 0.5) * 0.2 / 8, h);
+        sum += formfactor::polygon_form_factor(point, Vec3(0, 0, -1), scene.floor);
+      }
+    }
+    return sum / (8.0 * columns);
+  };
+  const double exact = (0.05 * mean_over(0.95, 1.0, 400) + 0.15 * mean_over(1.0, 1.15, 1200)) / 0.2 * 0.04;
+  EXPECT_NEAR(exact, 0.0100025, 1e-6);
+  const double centroid = formfactor::polygon_form_factor(Vec3(1.05, 0.5, h), Vec3(0, 0, -1), scene.floor) * 0.04;
+  EXPECT_LT(centroid, 1e-4);
+  formfactor::AnalyticBackend backend;
+  const std::vector<double> before = scene.shoot(backend);
+  ASSERT_GT(before[plate], 0.0);
+  NearFieldCorrection correction(4.0);
+  const std::vector<double> after = scene.corrected(before, correction);
+  EXPECT_EQ(correction.near_scale(), 1.0);
+  EXPECT_NEAR(after[plate], exact, 0.01 * exact);
+}
+
 TEST(NearField, ReceiversNextToASliverAreSmallerThanItsWidth) {
   const double width = 0.003;
   Scene scene;
