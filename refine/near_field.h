@@ -27,6 +27,10 @@
 // seen edge on through the bottom row of a side face, about half its factor: the cosine kernel, zero at the
 // horizon, varies by a factor of two across that row).
 //
+// A small receiver facing the patch (within 60 degrees) closer to the patch's plane than its own radius sees the
+// patch's edge, where one lies across it, as a step from about 1 to about 0: it gets the mean of F(dA_x -> A_s)
+// over itself, by ever finer rules from its centroid on until two agree to 1 %.
+//
 // A near receiver too large for its centroid to stand for it (a box's top just under a lamp, larger than the lamp)
 // is shaped from the patch's side instead: G_e = v_e times the mean over the patch of F(dA_p -> e), the exact factor
 // from points p of the patch, by 2 x 2 Gauss points in 1, 4, 16 and 64 cells until two rules agree to 1 % (unless
