@@ -24,7 +24,7 @@ constexpr int kPatchLevels = 4;
 constexpr std::size_t kFinePoints = 64;
 // A small receiver facing the patch close by gets the mean over it of the exact factor to the patch: from its centroid,
 // then by 2 x 2 Gauss points in 1, 4, 16 and 64 cells, until two rules in a row agree to kPatchAgree, or to
-// kReceiverFloor of the most the receiver could get (its area over the patch's).
+// kReceiverFloor (point factors are at most 1).
 constexpr int kReceiverLevels = 4;
 constexpr double kFacing = 0.5;  // cos 60 degrees: a receiver facing the patch within 60 degrees
 constexpr double kReceiverFloor = 1e-4;
@@ -215,7 +215,8 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
   }
   if (!(reach_ > 0.0) || !(shooter.area > 0.0)) return;
   const double radius = mark_near_patches(shooter);
-  patch_points_.assign(kPatchLevels, {});
+  patch_points_.resize(kPatchLevels);  // emptied, their memory kept: each shape() makes them for its own patch
+  for (std::vector<AreaSample>& rule : patch_points_) rule.clear();
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
   const double size = patch_extent(shooter.polygon, radius);
@@ -285,7 +286,7 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
     if (front_area > 0.0) {
       from_receiver = facing_close ? receiver_average(shooter, crosses ? std::span<const Vec3>(front_) : polygon,
                                                       front_centroid, receiver_normal,
-                                                      kReceiverFloor * front_area / shooter.area)
+                                                      kReceiverFloor)
                                    : unoccluded_factor(front_centroid, receiver_normal, shooter.polygon, local_,
                                                        clipped_);
     }

@@ -251,7 +251,9 @@ Rgb Solver::ambient() const { return scan_patches().ambient; }
 // at most kAreaPointsChange of the shot (then the fewer stand for the patch as well: a box's top 0.01 under a
 // ceiling sees the ceiling from every point). The patch shoots from the points chosen from then on, and this shot
 // is made from them too: a patch's shots move flux among the pieces of split leaves, and settle what they owe, by
-// the factors of its next shots, which must be the same (share_out_history).
+// the factors of its next shots, which should be the same (share_out_history). A patch whose first shots were not
+// refused made them from its centroid; should a later one be, its points change once, and share_out_history
+// scales down what it moves where the factors differ.
 bool Solver::choose_area_points(mesh::NodeId shooter, AreaPointsTrial& trial) {
   const double near_total = near_field_.near_back_end_total();
   const int more = more_area_points(shot_samples_);

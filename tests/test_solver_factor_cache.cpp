@@ -77,8 +77,9 @@ TEST(SolverFactorCache, ReusedFactorsSolveTheCornellBoxAsFreshOnes) {
 }
 
 // A patch that shoots from points over its area (Solver::area_shooters) keeps the points in its row, and a row from
-// other points is not reused: the lamp of data/limits/box_under_lamp.obj shoots from 5 x 5 points after its first
-// shot from the centroid, and the box's top, 0.01 under the ceiling, stays with its centroid after trying 3 x 3.
+// other points is not reused. In data/limits/box_under_lamp.obj two patches do: the lamp, whose first shot is made
+// again from 3 x 3 and then 5 x 5 points, and the ceiling patch beside it, over the box's top; the box's top, 0.01
+// under the ceiling, tries 3 x 3 and stays with its centroid.
 TEST(SolverFactorCache, ReusedFactorsOfPatchesShootingFromMorePointsSolveAsFreshOnes) {
   const Scene scene = import_obj(std::string(AARAD_SOURCE_DIR) + "/data/limits/box_under_lamp.obj");
   SolverOptions options;
