@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace aarad::refine {
 namespace {
@@ -54,6 +55,18 @@ void expect_same_solution(const Solver& fresh, const Solver& reusing) {
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(absorbed_b[c], absorbed_a[c], 1e-12 * absorbed_a[c]);
 }
 
+// The scene solved with every shot computed afresh and with the factor cache on, the options otherwise the same.
+std::pair<std::unique_ptr<Solver>, std::unique_ptr<Solver>> solve_afresh_and_reusing(const Scene& scene,
+                                                                                    SolverOptions options) {
+  options.factor_cache_mib = 0;
+  auto fresh = std::make_unique<Solver>(scene, options);
+  fresh->run();
+  options.factor_cache_mib = 2048;
+  auto reusing = std::make_unique<Solver>(scene, options);
+  reusing->run();
+  return {std::move(fresh), std::move(reusing)};
+}
+
 // With the near-field correction (the default) and without.
 TEST(SolverFactorCache, ReusedFactorsSolveTheCornellBoxAsFreshOnes) {
   for (const double near_field : {4.0, 0.0}) {
@@ -84,12 +97,8 @@ TEST(SolverFactorCache, ReusedFactorsOfPatchesShootingFromMorePointsSolveAsFresh
   const Scene scene = import_obj(std::string(AARAD_SOURCE_DIR) + "/data/limits/box_under_lamp.obj");
   SolverOptions options;
   options.max_shots = 300;
-  options.factor_cache_mib = 0;
-  Solver fresh(scene, options);
-  fresh.run();
-  options.factor_cache_mib = 2048;
-  Solver reusing(scene, options);
-  reusing.run();
+  const auto [fresh_solver, reusing_solver] = solve_afresh_and_reusing(scene, options);
+  const Solver &fresh = *fresh_solver, &reusing = *reusing_solver;
   EXPECT_EQ(reusing.area_shooters(), 2);
   EXPECT_EQ(fresh.area_shooters(), reusing.area_shooters());
   EXPECT_GT(reusing.reused_shots(), 0);
@@ -184,12 +193,8 @@ TEST(SolverFactorCache, AClosedRoomSolvedWithReusedFactorsIsTheSameAndBalanced) 
     options.converge = c.converge;
     options.meshing.patch_size = 0.25;
     options.meshing.element_size = 0.125;
-    options.factor_cache_mib = 0;
-    Solver fresh(scene, options);
-    fresh.run();
-    options.factor_cache_mib = 2048;
-    Solver reusing(scene, options);
-    reusing.run();
+    const auto [fresh_solver, reusing_solver] = solve_afresh_and_reusing(scene, options);
+    const Solver &fresh = *fresh_solver, &reusing = *reusing_solver;
     const double escaped = reusing.escaped_flux().sum() / reusing.emitted_flux().sum();
     std::printf("unit cube, %s, %d x %d points: %lld shots (%lld reusing), %lld splits, %zu leaves, escaped %.3g "
                 "(afresh %.3g)\n",
