@@ -512,13 +512,14 @@ void add_solve_command(CLI::App& app) {
       ->check(size);
   cmd->add_flag("--balance", options->balance, "Keep edge-neighbours within one level of each other");
   cmd->add_option("--shooter-samples", options->solver.shooter_samples,
-                  "Gauss points per direction on the shooting patch (1: its centroid, as the paper)")
+                  "Gauss points per direction on the shooting patch (1: its centroid, as the paper); a patch whose "
+                  "point cannot stand for it shoots from 3 or 5 per direction")
       ->transform(whole_number_in(1, 64))
       ->capture_default_str();
   cmd->add_option("--near-field", options->solver.near_field,
-                  "Receivers within this many patch radii of the shooting patch, and smaller than it (3/4 of its "
-                  "radius and of its width), get the shape "
-                  "of their share from the patch's exact factor seen from them (0: off, the paper's method)")
+                  "Receivers within this many patch radii of the shooting patch get the shape of their share "
+                  "from the patch's exact factor: seen from them when smaller than it (3/4 of its radius and of its "
+                  "width), else from points over it (0: off, the paper's method)")
       ->check(number_in(0.0, End::kClosed, kInfinity, End::kOpen))
       ->capture_default_str();
   cmd->add_option("--factor-cache", options->solver.factor_cache_mib,
