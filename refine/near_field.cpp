@@ -92,36 +92,45 @@ double patch_extent(std::span<const Vec3> polygon, double radius) {
 
 }  // namespace
 
-double NearFieldCorrection::receiver_average(const NearFieldShooter& shooter, std::span<const Vec3> part,
-                                             const Vec3& centroid, const Vec3& normal, double floor) {
-  double coarse = unoccluded_factor(centroid, normal, shooter.polygon, local_, clipped_);
-  for (int level = 0; level < kReceiverLevels; ++level) {
-    polygon_quadrature(part, 2, 1 << level, receiver_points_);
-    double fine = 0.0;
-    for (const AreaSample& point : receiver_points_)
-      fine += point.weight * unoccluded_factor(point.position, normal, shooter.polygon, local_, clipped_);
+namespace {
+
+// Ever finer rules, rule(first), rule(first + 1) ... up to level levels - 1, after `coarse`, the value of the
+// coarsest: the first that agrees with the one before it to kPatchAgree (plus `floor`), or the finest.
+template <class Rule>
+double refine_until_agreed(double coarse, int first, int levels, double floor, Rule&& rule) {
+  for (int level = first; level < levels; ++level) {
+    const double fine = rule(level);
     if (std::abs(fine - coarse) <= kPatchAgree * fine + floor) return fine;
     coarse = fine;
   }
   return coarse;
 }
 
+}  // namespace
+
+double NearFieldCorrection::receiver_average(const NearFieldShooter& shooter, std::span<const Vec3> part,
+                                             const Vec3& centroid, const Vec3& normal) {
+  const auto rule = [&](int level) {
+    polygon_quadrature(part, 2, 1 << level, receiver_points_);
+    double sum = 0.0;
+    for (const AreaSample& point : receiver_points_)
+      sum += point.weight * unoccluded_factor(point.position, normal, shooter.polygon, local_, clipped_);
+    return sum;
+  };
+  const double from_centroid = unoccluded_factor(centroid, normal, shooter.polygon, local_, clipped_);
+  return refine_until_agreed(from_centroid, 0, kReceiverLevels, kReceiverFloor, rule);
+}
+
 double NearFieldCorrection::patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon) {
   const auto rule = [&](int level) {
     std::vector<AreaSample>& points = patch_points_[static_cast<std::size_t>(level)];
-    if (points.empty()) points = polygon_quadrature(shooter.polygon, 2, 1 << level);
+    if (points.empty()) polygon_quadrature(shooter.polygon, 2, 1 << level, points);
     double sum = 0.0;
     for (const AreaSample& point : points)
       sum += point.weight * unoccluded_factor(point.position, shooter.normal, polygon, local_, clipped_);
     return sum;
   };
-  double coarse = rule(0);
-  for (int level = 1; level < kPatchLevels; ++level) {
-    const double fine = rule(level);
-    if (std::abs(fine - coarse) <= kPatchAgree * fine) return fine;
-    coarse = fine;
-  }
-  return coarse;
+  return refine_until_agreed(rule(0), 1, kPatchLevels, 0.0, rule);
 }
 
 void NearFieldCorrection::set_patches(std::span<const Vec3> centroids, std::span<const double> radii) {
@@ -242,7 +251,7 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
     double receiver_radius = 0.0;
     for (const Vec3& corner : polygon) receiver_radius = std::max(receiver_radius, glm::length(corner - centroid));
     const bool small = receiver_radius <= kSmaller * size;
-    if (!small && (shooter.points.size() >= kFinePoints)) continue;
+    if (!small && shooter.points.size() >= kFinePoints) continue;
     // What the back end saw of the receiver: its factor over the factor it would have had with nothing in front.
     double unoccluded = 0.0;
     if (!shooter.unoccluded.empty()) {
@@ -285,8 +294,7 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
     double from_receiver = 0.0;
     if (front_area > 0.0) {
       from_receiver = facing_close ? receiver_average(shooter, crosses ? std::span<const Vec3>(front_) : polygon,
-                                                      front_centroid, receiver_normal,
-                                                      kReceiverFloor)
+                                                      front_centroid, receiver_normal)
                                    : unoccluded_factor(front_centroid, receiver_normal, shooter.polygon, local_,
                                                        clipped_);
     }

@@ -158,10 +158,9 @@ class NearFieldCorrection {
   // The factor with nothing occluding from the patch to `polygon`, averaged over the patch by ever finer rules.
   double patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon);
   // The factor with nothing occluding from `part` of a receiver (its centroid and unit normal given) to the patch,
-  // averaged over the part by ever finer rules, which stop when two agree (`floor`: an absolute tolerance on the
-  // point factors).
+  // averaged over the part by ever finer rules from its centroid on, which stop when two agree.
   double receiver_average(const NearFieldShooter& shooter, std::span<const Vec3> part, const Vec3& centroid,
-                          const Vec3& normal, double floor);
+                          const Vec3& normal);
   std::vector<AreaSample> receiver_points_;  // receiver_average's rule
   // The rules over the shooting patch, by level, each made when a large receiver first needs it.
   std::vector<std::vector<AreaSample>> patch_points_;

@@ -43,6 +43,23 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// The points a shot from the patch with `corners` is made from, with their weights: its centroid for one point per
+// side, else samples x samples Gauss points; each lifted by `lift` (compute_form_factors).
+void shooting_points(std::span<const Vec3> corners, const Vec3& centroid, const Vec3& lift, int samples,
+                     std::vector<Vec3>& points, std::vector<double>& weights) {
+  points.clear();
+  weights.clear();
+  if (samples <= 1) {
+    points.push_back(centroid + lift);
+    weights.push_back(1.0);
+    return;
+  }
+  for (const AreaSample& sample : polygon_quadrature(corners, samples)) {
+    points.push_back(sample.position + lift);
+    weights.push_back(sample.weight);
+  }
+}
+
 // The points per side to try after `samples` when they could not stand for the patch (compute_form_factors); 0
 // when there are no more to try.
 int more_area_points(int samples) {
@@ -277,6 +294,42 @@ bool Solver::choose_area_points(mesh::NodeId shooter, AreaPointsTrial& trial) {
   return true;
 }
 
+// The back end's factors of `shot` (all receivers when empty) into ff_, averaged over the points with their
+// weights; with `kept`, also their factors with nothing occluding into `unoccluded`. Returns whether the back end
+// gave those.
+bool Solver::back_end_factors(std::span<const Vec3> points, std::span<const double> weights, const Vec3& normal,
+                              std::span<const std::uint32_t> shot, bool kept, std::vector<double>& unoccluded) {
+  const auto take_unoccluded = [&](std::vector<double>& into) {
+    into.assign(ff_.size(), 0.0);
+    if (!backend_->add_unoccluded(into)) into.clear();
+  };
+  if (points.size() == 1) {
+    backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), shot, ff_);
+    if (kept) take_unoccluded(unoccluded);
+    return kept;
+  }
+  ff_sample_.assign(ff_.size(), 0.0);
+  const auto for_each_receiver = [&](auto&& body) {
+    if (shot.empty()) {
+      for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
+    } else {
+      for (std::uint32_t i : shot) body(i);
+    }
+  };
+  for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
+  if (kept) unoccluded.assign(ff_.size(), 0.0);
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    backend_->compute(formfactor::Shooter::from_normal(points[p], normal), cache_.view(), shot, ff_sample_);
+    for_each_receiver([&](std::uint32_t i) { ff_[i] += weights[p] * ff_sample_[i]; });
+    if (kept) {
+      take_unoccluded(unoccluded_sample_);
+      kept = !unoccluded_sample_.empty();
+      for (std::size_t i = 0; kept && i < unoccluded.size(); ++i) unoccluded[i] += weights[p] * unoccluded_sample_[i];
+    }
+  }
+  return kept;
+}
+
 void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uint32_t> subset) {
   const auto start = Clock::now();
   const Vec3 normal = hierarchy_.plane(shooter).normal;
@@ -297,27 +350,16 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
   const FactorRow* row = nullptr;
   std::span<const std::uint32_t> shot;  // the receivers the back end shoots into (all when empty)
   while (true) {
-    // The points the back end shoots from, with their weights.
-    points.clear();
-    weights.clear();
-    if (shot_samples_ <= 1) {
-      points.push_back(centroid + lift);
-      weights.push_back(1.0);
-    } else {
-      for (const AreaSample& sample : polygon_quadrature(corners, shot_samples_)) {
-        points.push_back(sample.position + lift);
-        weights.push_back(sample.weight);
-      }
-    }
+    shooting_points(corners, centroid, lift, shot_samples_, points, weights);
     NearFieldShooter near{corners, centroid, normal, hierarchy_.area(shooter), points, weights, {}};
     // A whole shot from a patch whose last whole shot is kept, from the same points, shoots only into the leaves
     // split since.
     row = subset.empty() ? factor_cache_.find(shooter, &hierarchy_.impl()) : nullptr;
     if (row != nullptr && row->samples != shot_samples_) row = nullptr;
     // With the near-field correction, the back end keeps the unoccluded factors of the receivers it may correct
-    // (taken into `into`, which is left empty when the back end has none). A reused shot lists those candidates on
-    // a second thread while this one reads the row (with the row's unoccluded factors, dropped below when the back
-    // end keeps none).
+    // (back_end_factors takes them, and says when the back end has none). A reused shot lists those candidates on a
+    // second thread while this one reads the row (with the row's unoccluded factors, dropped below when the back end
+    // keeps none).
     std::span<const std::uint8_t> candidates;
     const auto list_candidates = [&] { candidates = near_field_.candidates(near, cache_.view()); };
     shot = subset;
@@ -334,38 +376,9 @@ void Solver::compute_form_factors(mesh::NodeId shooter, std::span<const std::uin
       list_candidates();
     }
     bool kept = near_field && backend_->keep_unoccluded(candidates);
-    const auto take_unoccluded = [&](std::vector<double>& into) {
-      into.assign(ff_.size(), 0.0);
-      if (!backend_->add_unoccluded(into)) into.clear();
-    };
     if (row == nullptr || !shot.empty()) {
       // The unoccluded factors of `shot`: into unoccluded_, or beside the row's there.
-      std::vector<double>& shot_unoccluded = row != nullptr ? unoccluded_shot_ : unoccluded_;
-      if (points.size() == 1) {
-        backend_->compute(formfactor::Shooter::from_normal(points[0], normal), cache_.view(), shot, ff_);
-        if (kept) take_unoccluded(shot_unoccluded);
-      } else {
-        ff_sample_.assign(ff_.size(), 0.0);
-        const auto for_each_receiver = [&](auto&& body) {
-          if (shot.empty()) {
-            for (std::uint32_t i = 0; i < ff_.size(); ++i) body(i);
-          } else {
-            for (std::uint32_t i : shot) body(i);
-          }
-        };
-        for_each_receiver([&](std::uint32_t i) { ff_[i] = 0.0; });
-        if (kept) shot_unoccluded.assign(ff_.size(), 0.0);
-        for (std::size_t p = 0; p < points.size(); ++p) {
-          backend_->compute(formfactor::Shooter::from_normal(points[p], normal), cache_.view(), shot, ff_sample_);
-          for_each_receiver([&](std::uint32_t i) { ff_[i] += weights[p] * ff_sample_[i]; });
-          if (kept) {
-            take_unoccluded(unoccluded_sample_);
-            kept = !unoccluded_sample_.empty();
-            for (std::size_t i = 0; kept && i < shot_unoccluded.size(); ++i)
-              shot_unoccluded[i] += weights[p] * unoccluded_sample_[i];
-          }
-        }
-      }
+      kept = back_end_factors(points, weights, normal, shot, kept, row != nullptr ? unoccluded_shot_ : unoccluded_);
       if (row != nullptr && kept && !unoccluded_shot_.empty()) {
         for (std::uint32_t i : shot) unoccluded_[i] = unoccluded_shot_[i];
       }

@@ -217,6 +217,8 @@ class Solver {
     int previous_samples;
   };
   bool choose_area_points(mesh::NodeId shooter, AreaPointsTrial& trial);
+  bool back_end_factors(std::span<const Vec3> points, std::span<const double> weights, const Vec3& normal,
+                        std::span<const std::uint32_t> shot, bool kept, std::vector<double>& unoccluded);
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates, int samples);
   // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
   // keeping those.
