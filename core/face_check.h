@@ -14,10 +14,8 @@
 
 namespace aarad {
 
-// A face is planar when no vertex lies farther than this fraction of its bounding-box diagonal from its plane;
-// its area is zero when twice its area (the length of its Newell sum) is below this fraction of the squared
-// diagonal.
-inline constexpr double kPlanarity = 1e-6;
+// A face's area is zero when twice its area (the length of its Newell sum) is below this fraction of its squared
+// bounding-box diagonal. (Whether it is planar depends on the scene it is in: the importer's planar_pieces.)
 inline constexpr double kZeroAreaFraction = 1e-12;
 // The range of scales the solver computes in: no coordinate beyond kMaxCoordinate in magnitude, no face smaller
 // (bounding-box diagonal) than kMinFaceSize. The solver's products of lengths stay far from the ends of a double's
@@ -45,8 +43,6 @@ struct FaceCheck {
   Vec3 normal{0.0};            // unit; the Newell normal (counter-clockwise seen from its tip)
   std::vector<Vec2> flat;      // `vertices` projected along `normal` (project_to_2d), counter-clockwise
   double deviation = 0.0;      // the largest distance of a vertex from the plane with `normal` through their mean
-
-  bool planar() const { return deviation <= kPlanarity * size; }
 };
 
 FaceCheck check_face(std::span<const Vec3> vertices);

@@ -632,14 +632,14 @@ Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* ent
   return m;
 }
 
-// Checks one face (check_face, shared with Scene::validate) and returns the polygons to add: none (skipped), the
-// face itself, or its triangles.
-std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const std::string& path, int line,
-                                            std::vector<std::string>& warnings) {
-  const FaceCheck check = check_face(face);
+// Checks one face (check_face, shared with Scene::validate) and returns its vertices (without repeated ones), or
+// none when it is skipped. Whether it is planar is decided once the scene's size is known (planar_pieces).
+std::vector<Vec3> checked_face(const std::vector<Vec3>& face, const std::string& path, int line,
+                               std::vector<std::string>& warnings, double& deviation) {
+  FaceCheck check = check_face(face);
   const auto skip = [&](const std::string& what) {
     warnings.push_back(InputError::format(path, line, what));
-    return std::vector<std::vector<Vec3>>{};
+    return std::vector<Vec3>{};
   };
   switch (check.problem) {
     case FaceProblem::kNone:
@@ -662,20 +662,34 @@ std::vector<std::vector<Vec3>> checked_face(const std::vector<Vec3>& face, const
       return skip("face of zero area skipped: its boundary encloses less than 1e-12 of its size squared; remove it or "
                   "fix its vertices");
   }
-  const std::vector<Vec3>& v = check.vertices;
-  if (check.planar()) return {v};
+  deviation = check.deviation;
+  return std::move(check.vertices);
+}
 
-  // Not planar: ear-clip its projection (counter-clockwise, since the normal is the Newell normal).
+// A face is planar when its vertices lie within `weld` of its plane: the distance within which the scene takes
+// faces for one plane (Scene::build_surfaces) and the meshing moves points onto their surface's plane, kPlaneDistance
+// of the scene's diagonal. A tolerance of the face's own size split faces that only the file's rounding bent: a
+// room turned off the axes and written with 6 significant digits had quads 2.2e-6 off their planes, 1.9e-6 of their
+// size, in a scene 7 across; its lamp, cut in two triangles, was meshed along their diagonal, and the ceiling 0.01
+// above it split into 8 763 leaves where the planar lamp left 732 (test
+// SceneImport.import_face_bent_by_the_files_rounding_is_kept_whole). A face bent more is split into triangles by ear
+// clipping its projection, with a warning.
+std::vector<std::vector<Vec3>> planar_pieces(std::vector<Vec3> face, double deviation, double weld,
+                                             const std::string& path, int line, std::vector<std::string>& warnings) {
+  if (deviation <= weld) return {std::move(face)};
+  const FaceCheck check = check_face(face);  // the projection, counter-clockwise about the Newell normal
   std::vector<std::array<std::size_t, 3>> triangles;
   ear_clip(check.flat, triangles);
   std::vector<std::vector<Vec3>> out;
+  const std::vector<Vec3>& v = check.vertices;
   for (const auto& t : triangles) {
     std::vector<Vec3> tri{v[t[0]], v[t[1]], v[t[2]]};
     if (2.0 * area(tri) > kZeroAreaFraction * check.size * check.size) out.push_back(std::move(tri));
   }
   warnings.push_back(InputError::format(
       path, line, "face is not planar (a vertex lies " + number_text(check.deviation) + " from its plane, more than " +
-                      number_text(kPlanarity) + " of its size); split into " + std::to_string(out.size()) +
+                      number_text(kPlaneDistance) + " of the scene's diagonal, " + number_text(weld) +
+                      "); split into " + std::to_string(out.size()) +
                       " triangles. Make the face planar or split it yourself to silence this"));
   return out;
 }
@@ -887,6 +901,7 @@ Scene import_obj(const std::string& obj_path) {
     std::vector<Vec3> polygon;
     int line;
     std::uint32_t smoothing;
+    double deviation;  // of its vertices from its plane (FaceCheck)
   };
   std::vector<Kept> kept;
   const auto first_corner = [](const std::vector<Vec3>& polygon) {
@@ -945,8 +960,9 @@ Scene import_obj(const std::string& obj_path) {
       }
       offset += count;
 
-      const auto polygons = checked_face(vertices, obj_path, line, warnings);
-      if (polygons.empty()) {
+      double deviation = 0.0;
+      std::vector<Vec3> polygon = checked_face(vertices, obj_path, line, warnings, deviation);
+      if (polygon.empty()) {
         note_skip(line);
         continue;
       }
@@ -961,18 +977,15 @@ Scene import_obj(const std::string& obj_path) {
         material = *default_material;
         unassigned_faces = true;
       }
-      for (const auto& polygon : polygons) {
-        kept.push_back({shape_index, group_number, material, polygon, line, smoothing});
-        const auto [first, inserted] = kept_faces.insert(kept.size() - 1);
-        if (!inserted) {
-          kept.pop_back();
-          warnings.push_back(InputError::format(obj_path, line, "face repeats the face on line " +
-                                                                    std::to_string(kept[*first].line) +
-                                                                    " (the same vertices, the same way round, "
-                                                                    "group and material); skipped, so its area and "
-                                                                    "light count once"));
-          continue;
-        }
+      kept.push_back({shape_index, group_number, material, std::move(polygon), line, smoothing, deviation});
+      const auto [first, inserted] = kept_faces.insert(kept.size() - 1);
+      if (!inserted) {
+        kept.pop_back();
+        warnings.push_back(InputError::format(obj_path, line, "face repeats the face on line " +
+                                                                  std::to_string(kept[*first].line) +
+                                                                  " (the same vertices, the same way round, group "
+                                                                  "and material); skipped, so its area and light "
+                                                                  "count once"));
       }
     }
   }
@@ -995,8 +1008,8 @@ Scene import_obj(const std::string& obj_path) {
   const double smallest = kSmallestFace * glm::length(high - low);
   const double weld = kPlaneDistance * glm::length(high - low);  // the meshing's (scene.h)
   std::vector<std::optional<std::uint32_t>> groups(shapes.size());
-  for (Kept& k : kept) {
-    const double size = box_diagonal(k.polygon);
+  const auto add_piece = [&](const Kept& k, std::vector<Vec3> polygon) {
+    const double size = box_diagonal(polygon);
     if (size < smallest) {
       warnings.push_back(InputError::format(
           obj_path, k.line, "face too small against the scene (its size " + number_text(size) + " is below " +
@@ -1004,7 +1017,7 @@ Scene import_obj(const std::string& obj_path) {
                                 number_text(smallest / kSmallestFace) + ", which the meshing does not resolve) skipped; "
                                 "scale it up or give it a scene of its own"));
       note_skip(k.line);
-      continue;
+      return;
     }
     // A face narrower everywhere than the meshing's weld distance (kPlaneDistance of the diagonal: a sliver, all
     // its vertices within that of one line) collapses there onto its own edges; a surface of only such faces was
@@ -1012,18 +1025,27 @@ Scene import_obj(const std::string& obj_path) {
     // and 1.6 long had no plane to keep their corners on (children 6.7e-8 off their parents' planes) and elements
     // far below min_area. Its area (below kPlaneDistance x its length x the diagonal) is no light to speak of, so it
     // is skipped with a warning, as the faces too small are.
-    const double width = width_across(k.polygon);
+    const double width = width_across(polygon);
     if (width <= weld) {
       warnings.push_back(InputError::format(
           obj_path, k.line, "face too narrow against the scene (its width " + number_text(width) + " is below " +
                                 number_text(kPlaneDistance) + " of the scene's diagonal, " + number_text(weld) +
                                 ", which the meshing takes for a rounding error) skipped; make it wider or remove it"));
       note_skip(k.line);
-      continue;
+      return;
     }
     std::optional<std::uint32_t>& group = groups[k.shape];
     if (!group) group = scene.add_group(group_name_of(shapes[k.shape]));
-    scene.add_face(*group, k.material, std::move(k.polygon), k.line, k.smoothing);
+    scene.add_face(*group, k.material, std::move(polygon), k.line, k.smoothing);
+  };
+  for (Kept& k : kept) {
+    // A face too small is skipped whole, without a word on its planarity.
+    if (box_diagonal(k.polygon) < smallest) {
+      add_piece(k, std::move(k.polygon));
+      continue;
+    }
+    for (std::vector<Vec3>& piece : planar_pieces(std::move(k.polygon), k.deviation, weld, obj_path, k.line, warnings))
+      add_piece(k, std::move(piece));
   }
   std::vector<Kept>().swap(kept);
   if (unassigned_faces && text.material_uses.empty() && text.material_libraries.empty())
