@@ -68,11 +68,22 @@ std::vector<std::string> split_tokens(const std::string& line) {
 // backslash goes on on the next line (Wavefront's OBJ specification, appendix B1, "\" line continuation): it is
 // joined into one line under the number of its first, and an empty line stands in for each line joined to it, so
 // the lines after it keep their numbers. Comment lines are not continued.
-std::string clean_text(std::istream& in) {
+std::string clean_text(std::istream& in, const std::string& path) {
   static const std::set<std::string> kCommentAfter{"v",  "vt", "vn", "vp", "f", "l",  "p",  "s",     "mtllib",
                                                    "usemtl", "newmtl", "Kd", "Ka", "Ks", "Ke", "Tf", "Ns", "Ni",
                                                    "d",  "Tr", "illum"};
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text;
+  // A file that opens but fails as it is read (/proc/self/mem, a disk error) throws from the stream's buffer; said
+  // as a problem of the file, not an internal error.
+  try {
+    errno = 0;
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  } catch (const std::ios_base::failure&) {
+    const int reason = errno;
+    throw InputError(path, 0, std::string("cannot read the file (") + (reason != 0 ? std::strerror(reason) : "read error") +
+                                  ")");
+  }
+  if (in.bad()) throw InputError(path, 0, "cannot read the file (read error)");
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
   // Every line end is one LF: CR LF, and a CR alone also in a file of LF line ends, as tinyobjloader's reader
   // splits lines; where it split at a CR that the line count did not, the faces' line numbers were lost (a stray CR
@@ -92,6 +103,13 @@ std::string clean_text(std::istream& in) {
     }
   }
   text.resize(kept);
+  // A NUL byte cut the statement it stood in short, without a word: "o wall\0A" and "o wall\0B" named one group
+  // 'wall', and "v 1 1\0001" lacked a coordinate. A text file holds none.
+  if (const auto nul = text.find('\0'); nul != std::string::npos) {
+    const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(nul), '\n');
+    throw InputError(path, static_cast<int>(line), "a NUL byte, which a text file does not hold; OBJ and MTL files are "
+                                                   "text: is this a binary file, or was the file damaged?");
+  }
   // Where the backslash that continues `line` is (the last character but blanks and a CR), or npos.
   const auto continuation = [](const std::string& line) {
     const auto first = line.find_first_not_of(" \t");
@@ -150,7 +168,7 @@ class CleanMaterialReader final : public tinyobj::MaterialReader {
     if (!fs::is_regular_file(folder_ / name, error)) return false;
     std::ifstream in(folder_ / name);
     if (!in) return false;
-    std::istringstream text(clean_text(in));
+    std::istringstream text(clean_text(in, (folder_ / name).string()));
     tinyobj::LoadMtl(material_map, materials, &text, warnings, errors);
     return true;
   }
@@ -543,7 +561,7 @@ Rgb parse_colour(const std::string& path, int line, const std::vector<std::strin
 void read_mtl_text(const std::string& path, std::map<std::string, MtlEntry>& entries,
                    std::vector<std::string>& warnings) {
   std::ifstream file(path);
-  std::istringstream in(clean_text(file));
+  std::istringstream in(clean_text(file, path));
   std::string line;
   int number = 0;
   MtlEntry* current = nullptr;
@@ -623,6 +641,17 @@ Material checked_material(const tinyobj::material_t& parsed, const MtlEntry* ent
                        "material '" + m.name + "': Ke " + rgb_text(m.emission) +
                            " must be finite and >= 0 per channel. Ke is the emitted radiosity; use 0 for a surface "
                            "that does not emit");
+    if (m.reflectance[c] > 0.0 && m.reflectance[c] < kMinReflectance)
+      throw InputError(file, kd_line,
+                       "material '" + m.name + "': Kd " + rgb_text(m.reflectance) +
+                           " is below 1e-100 in a channel but not 0: doubles lose the digits of what it reflects. "
+                           "Use 0 for a channel that reflects nothing");
+    if (m.emission[c] > 0.0 && m.emission[c] < kMinEmission)
+      throw InputError(file, ke_line,
+                       "material '" + m.name + "': Ke " + rgb_text(m.emission) +
+                           " is below 1e-100 in a channel but not 0: doubles lose the digits of the light it sends "
+                           "round the scene. Radiosity is linear in the emission, so scale Ke up and the results "
+                           "back down, or use 0 for a channel that emits nothing");
     if (m.emission[c] > kMaxEmission)
       throw InputError(file, ke_line,
                        "material '" + m.name + "': Ke " + rgb_text(m.emission) +
@@ -752,7 +781,7 @@ Scene import_obj(const std::string& obj_path) {
   std::vector<std::string>& warnings = scene.warnings;
   // The text is held once, and copies of it (a stream copies its string) only while they are read: for a
   // million-face file each was 42 MB, and four of them stayed until the end of the import.
-  std::string cleaned = with_unnamed_groups_named(clean_text(obj_file), obj_path, warnings);
+  std::string cleaned = with_unnamed_groups_named(clean_text(obj_file, obj_path), obj_path, warnings);
   const ObjText text = [&] {
     std::istringstream in(cleaned);
     return read_obj_text(obj_path, in, warnings);

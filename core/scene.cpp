@@ -13,10 +13,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <limits>
 #include <map>
 #include <optional>
+#include <string>
 #include <tuple>
 #include <unordered_map>
 #include <utility>
@@ -30,6 +32,24 @@ namespace {
 constexpr double kNormalDotTolerance = 1e-10;
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string text_of(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+// A face lies farther from the origin than kMaxRemoteness diagonals of the scene.
+std::string remoteness_message(const std::string& face, double coordinate, double diagonal, const Vec3& low,
+                               const Vec3& high) {
+  const Vec3 centre = 0.5 * (low + high);
+  return face + " lies too far from the origin for the scene's size: a coordinate of " + text_of(coordinate) +
+         " where the scene is " + text_of(diagonal) + " across (" + text_of(coordinate / diagonal) +
+         " times; at most " + text_of(kMaxRemoteness) + "). Doubles there are " +
+         text_of(coordinate * std::numeric_limits<double>::epsilon()) + " apart, too coarse for its geometry; move "
+         "the scene nearer the origin, e.g. subtract its centre (" + text_of(centre.x) + ", " + text_of(centre.y) +
+         ", " + text_of(centre.z) + ") from every vertex";
+}
 
 }  // namespace
 
@@ -146,11 +166,13 @@ void Scene::validate() const {
   if (faces.empty()) throw InputError(where, 0, "the scene has no faces; add at least one polygon");
   for (const Material& m : materials) {
     for (int c = 0; c < 3; ++c) {
-      if (!(m.reflectance[c] >= 0.0 && m.reflectance[c] < 1.0))
-        throw InputError(where, 0, "material '" + m.name + "': reflectance must lie in [0, 1) per channel, "
-                                   "otherwise the solution would not converge");
-      if (!(m.emission[c] >= 0.0 && m.emission[c] <= kMaxEmission))
-        throw InputError(where, 0, "material '" + m.name + "': emission must be >= 0 and at most 1e100 per channel");
+      if (!(m.reflectance[c] == 0.0 || (m.reflectance[c] >= kMinReflectance && m.reflectance[c] < 1.0)))
+        throw InputError(where, 0, "material '" + m.name + "': reflectance must be 0 or lie in [1e-100, 1) per "
+                                   "channel: at 1 or more the solution would not converge, and below 1e-100 doubles "
+                                   "lose the digits of what it reflects");
+      if (!(m.emission[c] == 0.0 || (m.emission[c] >= kMinEmission && m.emission[c] <= kMaxEmission)))
+        throw InputError(where, 0, "material '" + m.name + "': emission must be 0 or lie in [1e-100, 1e100] per "
+                                   "channel");
     }
   }
   std::size_t surface_faces = 0;
@@ -158,6 +180,7 @@ void Scene::validate() const {
   if (surface_faces != faces.size())
     throw Error(where + ": physical surfaces are not built; call Scene::build_surfaces() after the last add_face");
   const double smallest = kSmallestFace * diagonal();
+  const double farthest = kMaxRemoteness * diagonal();
   for (std::size_t fi = 0; fi < faces.size(); ++fi) {
     const Face& f = faces[fi];
     if (f.group >= groups.size())
@@ -204,6 +227,12 @@ void Scene::validate() const {
     if (box_diagonal(f.vertices) < smallest)
       throw InputError(where, f.source_line, face + " is smaller than 1e-5 of the scene's diagonal, below what the "
                                                     "meshing resolves; remove it or scale it up");
+    for (const Vec3& v : f.vertices) {
+      const double coordinate = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+      if (coordinate > farthest)
+        throw InputError(where, f.source_line, remoteness_message(face, coordinate, diagonal(), bounds_min(),
+                                                                  bounds_max()));
+    }
   }
   Rgb flux{};
   for (const Face& f : faces) flux += materials[f.material].emission * area(f.vertices);

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <tuple>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -310,15 +311,13 @@ TEST_F(SceneImport, import_infinite_coordinate_is_error_with_line) {
       << accented.message();
 }
 
-// A NUL byte inside a number (a damaged file) ended the C string there: "1\0garbage" was read as 1.
+// A NUL byte inside a number (a damaged file) ended the C string there: "1\0garbage" was read as 1. A text file
+// holds none, so the byte is the error, with its line.
 TEST_F(SceneImport, import_coordinate_with_a_nul_byte_is_error_with_line) {
   const char text[] = "v 0 0 0\nv 1\0garbage 0 0\nv 1 1 0\nf 1 2 3\n";
   const InputError e = import_error(write("nul.obj", std::string(text, sizeof text - 1)));
   EXPECT_EQ(e.line(), 2);
-  EXPECT_NE(e.message().find("is not a number"), std::string::npos) << e.message();
-  // The word is shown with its NUL escaped: printed, the raw NUL cut the message off after "'1" (what() is a C
-  // string), reason and fix lost.
-  EXPECT_NE(std::string(e.what()).find("vertex coordinate '1\\x00garbage' is not a number"), std::string::npos)
+  EXPECT_NE(std::string(e.what()).find(":2: a NUL byte, which a text file does not hold"), std::string::npos)
       << e.what();
 }
 
@@ -403,6 +402,31 @@ TEST_F(SceneImport, import_face_with_a_token_that_is_not_a_vertex_reference_is_e
   EXPECT_EQ(import_obj(write("forms.obj", ok)).faces.size(), 1u);
 }
 
+// A NUL byte cut its statement short without a word ("o wall\0A" and "o wall\0B" named one group); a text file
+// holds none, so it is an error with its line, in the OBJ and in an MTL.
+TEST_F(SceneImport, import_nul_byte_is_error_with_line) {
+  write("s.mtl", kSquareMtl);
+  const std::string obj = write("nul.obj", std::string("mtllib s.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\no wall\0A\n"
+                                                       "f 1 2 3\n", 66));
+  const InputError e = import_error(obj);
+  EXPECT_EQ(e.file(), obj);
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(e.message().find("a NUL byte"), std::string::npos) << e.message();
+  const std::string mtl = write("nul.mtl", std::string("newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1\0 1\n", 37));
+  const InputError m = import_error(write("nul2.obj", "mtllib nul.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"));
+  EXPECT_EQ(m.file(), mtl);
+  EXPECT_EQ(m.line(), 3);
+}
+
+// A file that opens but fails as it is read throws from the stream's buffer: it was an internal error (exit 3)
+// naming no file. /proc/self/mem opens and fails to read at offset 0.
+TEST_F(SceneImport, import_file_that_fails_as_it_is_read_is_an_input_error) {
+  if (!fs::is_regular_file("/proc/self/mem")) GTEST_SKIP() << "no /proc/self/mem here";
+  const InputError e = import_error("/proc/self/mem");
+  EXPECT_EQ(e.file(), "/proc/self/mem");
+  EXPECT_NE(e.message().find("cannot read the file"), std::string::npos) << e.message();
+}
+
 TEST_F(SceneImport, import_self_intersecting_face_is_error_with_line) {
   // Planar bow-ties: a symmetric one (its signed area is zero) and a lopsided one, in a tilted plane.
   const std::string head = "v 0 0 0\nv 1 1 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv 3 2 3\nv 3 0 3\nv 0 1 0\n";
@@ -426,6 +450,22 @@ TEST_F(SceneImport, import_kd_outside_unit_interval_is_error_with_mtl_line) {
     EXPECT_NE(e.message().find("would not converge"), std::string::npos) << kd;
     EXPECT_NE(e.message().find("'hot'"), std::string::npos) << kd;
   }
+}
+
+// Below 1e-100 but not 0, a channel of Kd or Ke is refused with its line: doubles lose its digits (a unit box lit
+// with Ke 1e-308 solved 20 % off, and Kd 1e-320 split it into 139 000 elements).
+TEST_F(SceneImport, import_kd_or_ke_below_1e_100_but_not_0_is_error_with_mtl_line) {
+  for (const auto& [kd, ke, line] : {std::tuple{"0.5 1e-320 0.5", "1 1 1", 2}, {"0.5 0.5 0.5", "1e-308 0 0", 3},
+                                     {"0.5 0.5 0.5", "1e-101 1 1", 3}}) {
+    const std::string mtl = write("faint.mtl", std::string("newmtl lamp\nKd ") + kd + "\nKe " + ke + "\n");
+    const std::string obj = write("faint.obj", "mtllib faint.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n");
+    const InputError e = import_error(obj);
+    EXPECT_EQ(e.file(), mtl) << kd << " / " << ke;
+    EXPECT_EQ(e.line(), line) << kd << " / " << ke;
+    EXPECT_NE(e.message().find("is below 1e-100 in a channel but not 0"), std::string::npos) << e.message();
+  }
+  write("faint.mtl", "newmtl lamp\nKd 1e-100 0 0.5\nKe 1e-100 0 1\n");
+  EXPECT_NO_THROW(import_obj(write("faint.obj", "mtllib faint.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n")));
 }
 
 TEST_F(SceneImport, import_negative_ke_is_error_with_mtl_line) {
@@ -1405,6 +1445,46 @@ TEST(SceneModel, scene_validate_rejects_bad_materials) {
   EXPECT_NO_THROW(scene.validate());
   scene.materials[m].emission = Rgb(1.0, -1.0, 0.0);
   EXPECT_THROW(scene.validate(), InputError);
+  // 0, or at least 1e-100: below, doubles lose the digits of the light (kMinEmission, kMinReflectance).
+  scene.materials[m].emission = Rgb(1e-100, 0.0, 1.0);
+  scene.materials[m].reflectance = Rgb(1e-100, 0.0, 0.5);
+  EXPECT_NO_THROW(scene.validate());
+  scene.materials[m].emission = Rgb(1e-101, 0.0, 1.0);
+  EXPECT_THROW(scene.validate(), InputError);
+  scene.materials[m].emission = Rgb(1.0);
+  scene.materials[m].reflectance = Rgb(0.5, 1e-320, 0.5);
+  EXPECT_THROW(scene.validate(), InputError);
+}
+
+// A unit box 1e13 from the origin solved 6 % off, and 1e15 out the hemicube found its faces turned round: a scene
+// farther from the origin than kMaxRemoteness (4.5e8) of its diagonals is refused with the line of a face out
+// there; 1e8 out (5.8e7 diagonals) it is accepted.
+TEST_F(SceneImport, import_refuses_a_scene_too_far_from_the_origin_for_its_size) {
+  write("s.mtl", kSquareMtl);
+  for (const double offset : {1e8, 1e12}) {
+    std::string text = "mtllib s.mtl\nusemtl lamp\n";
+    for (const auto& [x, y, z] : {std::array{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}})
+      text += "v " + std::to_string(offset + x) + " " + std::to_string(offset + y) + " " + std::to_string(offset + z) +
+              "\n";
+    text += "f 1 2 3 4\nf 5 6 2 1\n";
+    const std::string obj = write("far.obj", text);
+    if (offset == 1e8) {
+      EXPECT_NO_THROW(import_obj(obj));
+      continue;
+    }
+    try {
+      import_obj(obj);
+      ADD_FAILURE() << "a unit scene 1e12 from the origin was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), obj);
+      EXPECT_EQ(e.line(), 9);
+      EXPECT_NE(e.message().find("face 0 (group 'far') lies too far from the origin for the scene's size: a "
+                                 "coordinate of 1e+12 where the scene is 1.73 across (5.77e+11 times; at most "
+                                 "4.5e+08)"),
+                std::string::npos)
+          << e.message();
+    }
+  }
 }
 
 // A face in code smaller than kSmallestFace of the scene's diagonal is an error, which the mesher crashed on.

@@ -262,12 +262,9 @@ void run_solve(SolveCommandOptions options) {
                 ":" + std::to_string(scene.meshing->source_line) + "; --patch-size and --element-size replace them)");
   }
   refine::Solver& solver = *made;
+  // Ke x area cannot underflow: Ke is 0 or at least 1e-100 (kMinEmission), and a face at least 1e-50 across with
+  // an area of at least 1e-12 of its size squared (core/face_check.h).
   if (!(solver.emitted_flux().sum() > 0.0)) {
-    const bool lit = std::any_of(scene.faces.begin(), scene.faces.end(),
-                                 [&](const Face& f) { return scene.materials[f.material].emits(); });
-    if (lit)  // Ke x area underflows: Ke 5e-324, or Ke 1e-300 on faces 1e-49 across
-      throw Error(scene.name + ": the emitted flux (Ke x area) is 0 in double precision: the lights are too faint "
-                  "or too small; scale Ke or the scene up (radiosity is linear in Ke)");
     throw Error(scene.name + ": nothing in the scene emits light (no material with Ke above 0), so the solution "
                 "would be black" +
                 (scene.warnings.empty() ? std::string() : " (see the warnings above)"));
