@@ -769,7 +769,11 @@ void warn_about_overlaps(const Scene& scene, const std::string& path, std::vecto
 
 Scene import_obj(const std::string& obj_path) {
   std::error_code ec;
-  if (!fs::exists(obj_path, ec))
+  const fs::file_status status = fs::status(obj_path, ec);
+  // "box.obj/" names a folder inside a file: not a directory, which is not "no such file".
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    throw InputError(obj_path, 0, "cannot reach the file (" + ec.message() + "); check the path");
+  if (!fs::exists(status))
     throw InputError(obj_path, 0, "no such file; check the path (built-in scenes are named without a path: cornell, "
                                   "office, furnace)");
   if (!fs::is_regular_file(obj_path, ec)) throw InputError(obj_path, 0, "not a regular file; give the path of an OBJ file");

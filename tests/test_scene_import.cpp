@@ -120,6 +120,11 @@ TEST_F(SceneImport, import_missing_obj_is_error_naming_file) {
   EXPECT_EQ(e.line(), 0);
   EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
   EXPECT_NE(e.message().find("no such file"), std::string::npos);
+  // A path through a file ("box.obj/") is not a directory, which "no such file" did not say.
+  const std::string through = write("box.obj", "v 0 0 0\n") + "/";
+  const InputError not_folder = import_error(through);
+  EXPECT_NE(not_folder.message().find("cannot reach the file (Not a directory)"), std::string::npos)
+      << not_folder.message();
 }
 
 TEST_F(SceneImport, import_unreadable_obj_is_error_naming_file) {
