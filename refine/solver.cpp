@@ -1050,16 +1050,26 @@ void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<
     // What the piece has of the earlier shots: its B but for its emission and its share of this shot, which a
     // later round of this substructuring may take back in full (take_back_split_shares) when it splits.
     const Rgb available = hierarchy_.radiosity(piece) - material(piece).emission -
-                          material(piece).reflectance * (received * (std::max(0.0, ff_[pieces[k]]) / area));
+                          material(piece).reflectance * (received * std::max(0.0, ff_[pieces[k]])) * (1.0 / area);
     double& part = share_scale_[slot];
     part = lowest_part(available.r, delta.r, part);
     part = lowest_part(available.g, delta.g, part);
     part = lowest_part(available.b, delta.b, part);
   }
+  // A piece that sets its leaf's scale ends on its emission (and its share of this shot), a rounding either side
+  // of it: the scale is its available B over its change, and their product rounds. Below its emission it is set to
+  // it (a unit room's piece ended at -1.1e-16, from B 0.949 and a change of -1.435 x 0.661).
   bool changed = false;
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     if (history_change_[k] == Rgb{}) continue;
-    hierarchy_.radiosity(cache_.leaf(pieces[k])) += history_change_[k] * share_scale_[share_slot_[ancestors[k]]];
+    const mesh::NodeId piece = cache_.leaf(pieces[k]);
+    const double scale = share_scale_[share_slot_[ancestors[k]]];
+    Rgb& b = hierarchy_.radiosity(piece);
+    b += history_change_[k] * scale;
+    if (scale < 1.0) {
+      const Rgb& e = material(piece).emission;
+      b = Rgb{std::max(b.r, e.r), std::max(b.g, e.g), std::max(b.b, e.b)};
+    }
     changed = true;
   }
   for (const mesh::NodeId ancestor : ancestors) share_slot_[ancestor] = kNoSlot;
