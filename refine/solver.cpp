@@ -905,9 +905,10 @@ void Solver::take_back_split_shares(std::span<const mesh::NodeId> split_nodes, m
     if (old_leaf >= first_new) continue;
     receive(old_leaf, shot_flux * received_factor_[old_leaf], -1.0);
   }
-  // The share is computed as deposit() added it, to the bit: B + share - share is then B again, or a rounding
-  // above it, never below. Computed as rho x flux / area, it left pieces that got nothing of their own at -8.9e-16
-  // (a unit box's first shot with the classical hemicube: 4 005 of 34 479 leaves below 0).
+  // The share is computed as deposit() added it, to the bit: taken back from a piece whose B held nothing else, it
+  // leaves exactly 0, and from any other with B >= 0 a B >= 0 (fl(B + s) >= s). Computed as rho x flux / area, it
+  // left pieces that got nothing of their own at -8.9e-16 (a unit box's first shot with the classical hemicube:
+  // 4 005 of 34 479 leaves below 0).
   for (mesh::NodeId leaf : new_leaves) {
     const mesh::NodeId ancestor = leaf_among_first(leaf, first_new);  // the leaf when the shot was received
     const Rgb inherited_share = material(ancestor).reflectance * (shot_flux * received_factor_[ancestor]) *
