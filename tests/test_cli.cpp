@@ -708,6 +708,32 @@ TEST(Cli, TheAnalyticBackEndWarnsWhereSurfacesMayHideOneAnother) {
   EXPECT_NE(r.err.find("warning: the analytic back end ignores visibility"), std::string::npos) << r.err;
 }
 
+// A group of faces in one plane that do not touch (two lamps in one group) has its centroid between them: an error
+// naming the pieces, where the factors were from that point, with a warning. Faces that share an edge, only a corner
+// or a point on an edge, or lie on one another, are one piece.
+TEST(Cli, FormfactorsRefuseAGroupInPiecesThatDoNotTouch) {
+  const std::string lid = "o lid\nv 0 2 0\nv 3 2 0\nv 3 2 3\nv 0 2 3\nf 1 2 3 4\n";
+  const auto group = [&](const std::string& name, const std::string& faces) {
+    return write_file(name + ".obj", lid + "o floor\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\n"
+                                           "v 2 0 0\nv 3 0 0\nv 3 0 1\nv 2 0 1\n"
+                                           "v 1 0 2\nv 0.5 0 0\nv 1.5 0 2\nv 0 0 -1\nv 1 0 -1\n"
+                                           "v 0.25 0 0.75\nv 0.75 0 0.75\nv 0.75 0 0.25\nv 0.25 0 0.25\n" + faces);
+  };
+  const fs::path apart = group("apart", "f 8 7 6 5\nf 12 11 10 9\n");
+  ProgramRun r = aarad("formfactors " + apart.string() + " --from floor --ff analytic");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("group 'floor' is not one planar polygon: its faces lie in one plane but in 2 pieces that do "
+                       "not touch"),
+            std::string::npos)
+      << r.err;
+  // A corner (1, 0, 1) shared; a vertex (0.5, 0, 0) on the other's edge; and a square within the other.
+  for (const std::string& faces : {std::string("f 8 7 6 5\nf 7 13 15\n"), std::string("f 8 7 6 5\nf 14 17 16\n"),
+                                   std::string("f 8 7 6 5\nf 18 19 20 21\n")}) {
+    r = aarad("formfactors " + group("touching", faces).string() + " --from floor --ff analytic");
+    EXPECT_EQ(r.code, 0) << faces << r.err;
+  }
+}
+
 // The centroid of a C-shaped group lies in its opening, off its faces: the factors are from there, with a
 // warning; a square's centroid is on it.
 TEST(Cli, FormfactorsWarnWhenTheCentroidIsOffTheGroup) {

@@ -5,6 +5,7 @@
 #include "aarad/core/builtin_scenes.h"
 #include "aarad/core/error.h"
 #include "aarad/core/polygon.h"
+#include "aarad/core/predicates.h"
 #include "aarad/formfactor/backend.h"
 #include "aarad/refine/report.h"
 
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -31,7 +33,57 @@ struct FormFactorsOptions {
   bool json = false;
 };
 
-// The shooting point: the area centroid of the group's faces, which must all lie in one plane.
+// How many pieces the faces make, projected along n: faces that share a point (an edge, a corner, a vertex on an
+// edge, or overlap), decided by exact predicates, are one piece. Faces are paired by their bounds, swept along x.
+std::size_t count_pieces(const Scene& scene, std::span<const std::uint32_t> faces, const Vec3& n) {
+  struct Flat {
+    std::vector<Vec2> points;
+    Vec2 low, high;
+  };
+  std::vector<Flat> flat(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const std::vector<Vec3>& vertices = scene.faces[faces[i]].vertices;
+    flat[i].points.resize(vertices.size());
+    project_to_2d(vertices, n, flat[i].points);
+    flat[i].low = flat[i].high = flat[i].points.front();
+    for (const Vec2& p : flat[i].points) {
+      flat[i].low = glm::min(flat[i].low, p);
+      flat[i].high = glm::max(flat[i].high, p);
+    }
+  }
+  const auto touch = [](const Flat& a, const Flat& b) {
+    for (std::size_t i = 0; i < a.points.size(); ++i) {
+      const Vec2 &p = a.points[i], &q = a.points[(i + 1) % a.points.size()];
+      for (std::size_t j = 0; j < b.points.size(); ++j)
+        if (segments_intersect(p, q, b.points[j], b.points[(j + 1) % b.points.size()])) return true;
+    }
+    // No boundaries meet: one lies inside the other, or they are apart.
+    return contains(a.points, b.points.front()) || contains(b.points, a.points.front());
+  };
+  std::vector<std::size_t> parent(faces.size()), order(faces.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const auto root = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return flat[a].low.x < flat[b].low.x; });
+  std::size_t pieces = faces.size();
+  for (std::size_t u = 0; u < order.size(); ++u) {
+    const Flat& a = flat[order[u]];
+    for (std::size_t v = u + 1; v < order.size() && flat[order[v]].low.x <= a.high.x; ++v) {
+      const Flat& b = flat[order[v]];
+      if (b.low.y > a.high.y || b.high.y < a.low.y) continue;
+      const std::size_t ra = root(order[u]), rb = root(order[v]);
+      if (ra == rb || !touch(a, b)) continue;
+      parent[ra] = rb;
+      --pieces;
+    }
+  }
+  return pieces;
+}
+
+// The shooting point: the area centroid of the group's faces, which must all lie in one plane and make one piece.
 formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_index) {
   // Physical surfaces are split by material as well as by plane, and form factors do not depend on material:
   // with one material for the group's faces, the import's own rule (Scene::build_surfaces) splits them by plane
@@ -79,6 +131,13 @@ formfactor::Shooter shooter_of_group(const Scene& scene, std::uint32_t group_ind
     total += a;
   }
   if (!(total > 0.0)) throw Error("group '" + group.name + "' has zero area; pick a group with a real face");
+  // Faces in one plane that do not touch (two lamps in one group) have their centroid between them, off every face:
+  // factors from there belong to no point of the group.
+  if (const std::size_t pieces = count_pieces(scene, faces, n); pieces > 1) {
+    throw Error("group '" + group.name + "' is not one planar polygon: its faces lie in one plane but in " +
+                std::to_string(pieces) + " pieces that do not touch, and its centroid lies between them; give each "
+                "piece a group of its own and pick one");
+  }
   const Vec3 point = weighted / total;
   // The centroid of a concave group (an L, a C) may lie off its faces: the factors are still from that point.
   Vec2 point_2d;
