@@ -90,10 +90,6 @@ double patch_extent(std::span<const Vec3> polygon, double radius) {
   return width;
 }
 
-}  // namespace
-
-namespace {
-
 // Ever finer rules, rule(first), rule(first + 1) ... up to level levels - 1, after `coarse`, the value of the
 // coarsest: the first that agrees with the one before it to kPatchAgree (plus `floor`), or the finest.
 template <class Rule>

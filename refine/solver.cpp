@@ -1062,7 +1062,8 @@ void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<
   // it (a unit room's piece ended at -1.1e-16, from B 0.949 and a change of -1.435 x 0.661).
   //
   // A current luminance table is kept current here, where forgetting it made the next gradient test recompute every
-  // receiver's luminance and test every receiver the shot reached (a sixth of the office's time went to that).
+  // receiver's luminance and test every receiver the shot reached (the office's substructuring took 5.4 of its
+  // 50.3 s, 3.3 of 48.3 s now: docs/benchmarks.md, "The office at c5d43ab and now").
   // The pieces' luminances change either way, so each pair's step grows by at most twice the widest change, which
   // drift_ takes in as it takes a shot's rise (steep_leaves_of_shot); the largest reflected luminance is kept unless
   // a piece that held it fell, and then the table is recomputed.
@@ -1078,7 +1079,7 @@ void Solver::share_out_history(std::span<const std::uint32_t> pieces, std::span<
     const double reflected_before = follow ? reflected_luminance(b, luminance_[pieces[k]], shading) : 0.0;
     b += history_change_[k] * scale;
     if (scale < 1.0) {
-      const Rgb& e = material(piece).emission;
+      const Rgb& e = shading.emission;
       b = Rgb{std::max(b.r, e.r), std::max(b.g, e.g), std::max(b.b, e.b)};
     }
     changed = true;

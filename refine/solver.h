@@ -208,8 +208,6 @@ class Solver {
   // unoccluded ones into unoccluded_ when `unoccluded`), the factors of the leaves split since into
   // received_factor_, and their leaves now into subset_, which it returns.
   std::span<const std::uint32_t> factors_from_row(const FactorRow& row, bool unoccluded);
-  // Keeps the back end's factors of a whole shot (row_ff_, and unoccluded_ of the near-field candidates) as the
-  // shooter's row; called with the factor cache enabled.
   // The points per side a shot tried before its current ones (compute_form_factors), and the near field's back-end
   // total from them (-1 before any).
   struct AreaPointsTrial {
@@ -219,6 +217,8 @@ class Solver {
   bool choose_area_points(mesh::NodeId shooter, AreaPointsTrial& trial);
   bool back_end_factors(std::span<const Vec3> points, std::span<const double> weights, const Vec3& normal,
                         std::span<const std::uint32_t> shot, bool kept, std::vector<double>& unoccluded);
+  // Keeps the back end's factors of a whole shot (row_ff_, and unoccluded_ of the near-field candidates), made from
+  // `samples` points per side, as the shooter's row; called with the factor cache enabled.
   void keep_row(mesh::NodeId shooter, std::span<const std::uint8_t> candidates, int samples);
   // Whether a row keeps receiver i's unoccluded factor: a near-field candidate that got a factor, with the back end
   // keeping those.
