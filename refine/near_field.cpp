@@ -7,7 +7,11 @@
 #include "aarad/formfactor/analytic.h"
 #include "aarad/formfactor/hemicube_geometry.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace aarad::refine {
@@ -105,25 +109,24 @@ double refine_until_agreed(double coarse, int first, int levels, double floor, R
 }  // namespace
 
 double NearFieldCorrection::receiver_average(const NearFieldShooter& shooter, std::span<const Vec3> part,
-                                             const Vec3& centroid, const Vec3& normal) {
+                                             const Vec3& centroid, const Vec3& normal, Scratch& scratch) {
   const auto rule = [&](int level) {
-    polygon_quadrature(part, 2, 1 << level, receiver_points_);
+    polygon_quadrature(part, 2, 1 << level, scratch.receiver_points);
     double sum = 0.0;
-    for (const AreaSample& point : receiver_points_)
-      sum += point.weight * unoccluded_factor(point.position, normal, shooter.polygon, local_, clipped_);
+    for (const AreaSample& point : scratch.receiver_points)
+      sum += point.weight * unoccluded_factor(point.position, normal, shooter.polygon, scratch.local, scratch.clipped);
     return sum;
   };
-  const double from_centroid = unoccluded_factor(centroid, normal, shooter.polygon, local_, clipped_);
+  const double from_centroid = unoccluded_factor(centroid, normal, shooter.polygon, scratch.local, scratch.clipped);
   return refine_until_agreed(from_centroid, 0, kReceiverLevels, kReceiverFloor, rule);
 }
 
-double NearFieldCorrection::patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon) {
+double NearFieldCorrection::patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon,
+                                          Scratch& scratch) const {
   const auto rule = [&](int level) {
-    std::vector<AreaSample>& points = patch_points_[static_cast<std::size_t>(level)];
-    if (points.empty()) polygon_quadrature(shooter.polygon, 2, 1 << level, points);
     double sum = 0.0;
-    for (const AreaSample& point : points)
-      sum += point.weight * unoccluded_factor(point.position, shooter.normal, polygon, local_, clipped_);
+    for (const AreaSample& point : patch_points_[static_cast<std::size_t>(level)])
+      sum += point.weight * unoccluded_factor(point.position, shooter.normal, polygon, scratch.local, scratch.clipped);
     return sum;
   };
   return refine_until_agreed(rule(0), 1, kPatchLevels, 0.0, rule);
@@ -206,6 +209,71 @@ void NearFieldCorrection::apply(const NearFieldShooter& shooter, const formfacto
   write(subset, ff);
 }
 
+// Receiver i of a shot's near field as shape() takes it: left as the back end gave it, shaped (its G), or to be
+// shaped from the patch's side (the fraction seen, which patch_average then multiplies). Reads only the shot and
+// the view, and writes only `scratch`: receivers are shaped in parallel.
+NearFieldCorrection::Shaped NearFieldCorrection::shape_receiver(const NearFieldShooter& shooter,
+                                                                 const formfactor::ReceiverView& receivers,
+                                                                 std::uint32_t i, std::span<const double> ff,
+                                                                 double near_squared, double size,
+                                                                 Scratch& scratch) const {
+  if (!(ff[i] > 0.0)) return {};  // hidden, culled or behind: nothing to shape
+  if (!near_patch(receivers.patch(i))) return {};
+  const std::span<const Vec3> polygon = receivers.polygon(i);
+  const double area = aarad::area(polygon);
+  const Vec3 centroid = aarad::centroid(polygon);
+  const Vec3 d = centroid - shooter.centroid;
+  if (!(glm::dot(d, d) < near_squared) || !(area > 0.0)) return {};
+  // Only receivers clearly smaller than the patch, and than its width: for them the centroid stands for the whole
+  // better than the patch's centroid stands for the patch.
+  double receiver_radius = 0.0;
+  for (const Vec3& corner : polygon) receiver_radius = std::max(receiver_radius, glm::length(corner - centroid));
+  const bool small = receiver_radius <= kSmaller * size;
+  if (!small && shooter.points.size() >= kFinePoints) return {};
+  // What the back end saw of the receiver: its factor over the factor it would have had with nothing in front.
+  double unoccluded = 0.0;
+  if (!shooter.unoccluded.empty()) {
+    unoccluded = shooter.unoccluded[i];
+  } else {
+    for (std::size_t p = 0; p < shooter.points.size(); ++p)
+      unoccluded += shooter.weights[p] * unoccluded_factor(shooter.points[p], shooter.normal, polygon, scratch.local,
+                                                           scratch.clipped);
+  }
+  const double seen = unoccluded > 0.0 ? std::min(1.0, ff[i] / unoccluded) : 1.0;
+  // A receiver as large as the patch or larger: the patch's own points stand for it better than one point of
+  // either, so the factor with nothing occluding is averaged over the patch (patch_average, once the rules are made).
+  if (!small) return {Shaped::kFromPatch, seen};
+  // A receiver crossing the patch's plane (a wall through a shelf's plane): only its part in front of the patch
+  // sees it, and that part's centroid stands for it. The receiver's own centroid may lie behind the patch
+  // (which it then does not see at all) or just in front of it, at the junction, where the factor is largest.
+  double front_area = area;
+  Vec3 front_centroid = centroid;
+  bool crosses = false;
+  for (const Vec3& corner : polygon)
+    crosses |= glm::dot(shooter.normal, corner - shooter.centroid) < -1e-9 * receiver_radius;
+  if (crosses) {
+    clip_to_front_of(polygon, shooter.centroid, shooter.normal, scratch.local, scratch.clipped, scratch.front);
+    front_area = scratch.front.empty() ? 0.0 : aarad::area(scratch.front);
+    if (front_area > 0.0) front_centroid = aarad::centroid(scratch.front);
+  }
+  // A receiver facing the patch closer to its plane than its own radius sees the patch's edge, where one lies
+  // across it, as a step of about that height's width: there its centroid stands for it badly (a plate leaf
+  // 0.002 under a lamp, its centroid just outside the lamp, gets nothing), and the factor is averaged over it.
+  // Elsewhere, at a junction too, the factor is smooth across the receiver and its centroid gives it.
+  const Vec3& receiver_normal = receivers.plane(i).normal;
+  const bool facing_close = glm::dot(receiver_normal, shooter.normal) < -kFacing &&
+                            glm::dot(shooter.normal, front_centroid - shooter.centroid) < receiver_radius;
+  double from_receiver = 0.0;
+  if (front_area > 0.0) {
+    from_receiver =
+        facing_close
+            ? receiver_average(shooter, crosses ? std::span<const Vec3>(scratch.front) : polygon, front_centroid,
+                               receiver_normal, scratch)
+            : unoccluded_factor(front_centroid, receiver_normal, shooter.polygon, scratch.local, scratch.clipped);
+  }
+  return {Shaped::kShaped, seen * from_receiver * front_area / shooter.area};
+}
+
 void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers,
                                 std::span<const std::uint32_t> subset, std::span<const double> ff) {
   near_.clear();
@@ -220,8 +288,6 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
   }
   if (!(reach_ > 0.0) || !(shooter.area > 0.0)) return;
   const double radius = mark_near_patches(shooter);
-  patch_points_.resize(kPatchLevels);  // emptied, their memory kept: each shape() makes them for its own patch
-  for (std::vector<AreaSample>& rule : patch_points_) rule.clear();
   const double near_distance = reach_ * radius;
   const double near_squared = near_distance * near_distance;
   const double size = patch_extent(shooter.polygon, radius);
@@ -232,72 +298,41 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
   const bool every = whole_shot && !listed;
   const std::span<const std::uint32_t> among = listed ? std::span<const std::uint32_t>(listed_) : subset;
   const std::size_t count = every ? receivers.size() : among.size();
+  const auto receiver_at = [&](std::size_t k) { return every ? static_cast<std::uint32_t>(k) : among[k]; };
+  // Each receiver depends on the shot alone, so they are shaped in parallel (the exact factors over a receiver or
+  // the patch took a fifth of the office's serial time); the totals are then added in the receivers' order, as one
+  // thread would, so the numbers do not depend on the threads.
+  found_.resize(count);
+  std::atomic<bool> from_patch{false};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& range) {
+    Scratch& scratch = scratch_.local();
+    bool any = false;
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      found_[k] = shape_receiver(shooter, receivers, receiver_at(k), ff, near_squared, size, scratch);
+      any = any || found_[k].state == Shaped::kFromPatch;
+    }
+    if (any) from_patch.store(true, std::memory_order_relaxed);
+  });
+  if (from_patch.load(std::memory_order_relaxed)) {
+    patch_points_.resize(kPatchLevels);
+    for (int level = 0; level < kPatchLevels; ++level)
+      polygon_quadrature(shooter.polygon, 2, 1 << level, patch_points_[static_cast<std::size_t>(level)]);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& range) {
+      Scratch& scratch = scratch_.local();
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        if (found_[k].state != Shaped::kFromPatch) continue;
+        found_[k].value *= patch_average(shooter, receivers.polygon(receiver_at(k)), scratch);
+      }
+    });
+  }
   double back_end_total = 0.0, shaped_total = 0.0;
   for (std::size_t k = 0; k < count; ++k) {
-    const std::uint32_t i = every ? static_cast<std::uint32_t>(k) : among[k];
-    if (!(ff[i] > 0.0)) continue;  // hidden, culled or behind: nothing to shape
-    if (!near_patch(receivers.patch(i))) continue;
-    const std::span<const Vec3> polygon = receivers.polygon(i);
-    const double area = aarad::area(polygon);
-    const Vec3 centroid = aarad::centroid(polygon);
-    const Vec3 d = centroid - shooter.centroid;
-    if (!(glm::dot(d, d) < near_squared) || !(area > 0.0)) continue;
-    // Only receivers clearly smaller than the patch, and than its width: for them the centroid stands for the whole
-    // better than the patch's centroid stands for the patch.
-    double receiver_radius = 0.0;
-    for (const Vec3& corner : polygon) receiver_radius = std::max(receiver_radius, glm::length(corner - centroid));
-    const bool small = receiver_radius <= kSmaller * size;
-    if (!small && shooter.points.size() >= kFinePoints) continue;
-    // What the back end saw of the receiver: its factor over the factor it would have had with nothing in front.
-    double unoccluded = 0.0;
-    if (!shooter.unoccluded.empty()) {
-      unoccluded = shooter.unoccluded[i];
-    } else {
-      for (std::size_t p = 0; p < shooter.points.size(); ++p)
-        unoccluded += shooter.weights[p] * unoccluded_factor(shooter.points[p], shooter.normal, polygon, local_, clipped_);
-    }
-    const double seen = unoccluded > 0.0 ? std::min(1.0, ff[i] / unoccluded) : 1.0;
-    if (!small) {
-      // A receiver as large as the patch or larger: the patch's own points stand for it better than one point of
-      // either, so the factor with nothing occluding is averaged over the patch.
-      const double from_patch = patch_average(shooter, polygon);
-      near_.push_back(i);
-      shaped_.push_back(seen * from_patch);
-      back_end_total += ff[i];
-      shaped_total += shaped_.back();
-      continue;
-    }
-    // A receiver crossing the patch's plane (a wall through a shelf's plane): only its part in front of the patch
-    // sees it, and that part's centroid stands for it. The receiver's own centroid may lie behind the patch
-    // (which it then does not see at all) or just in front of it, at the junction, where the factor is largest.
-    double front_area = area;
-    Vec3 front_centroid = centroid;
-    bool crosses = false;
-    for (const Vec3& corner : polygon)
-      crosses |= glm::dot(shooter.normal, corner - shooter.centroid) < -1e-9 * receiver_radius;
-    if (crosses) {
-      clip_to_front_of(polygon, shooter.centroid, shooter.normal, local_, clipped_, front_);
-      front_area = front_.empty() ? 0.0 : aarad::area(front_);
-      if (front_area > 0.0) front_centroid = aarad::centroid(front_);
-    }
-    // A receiver facing the patch closer to its plane than its own radius sees the patch's edge, where one lies
-    // across it, as a step of about that height's width: there its centroid stands for it badly (a plate leaf
-    // 0.002 under a lamp, its centroid just outside the lamp, gets nothing), and the factor is averaged over it.
-    // Elsewhere, at a junction too, the factor is smooth across the receiver and its centroid gives it.
-    const Vec3& receiver_normal = receivers.plane(i).normal;
-    const bool facing_close = glm::dot(receiver_normal, shooter.normal) < -kFacing &&
-                              glm::dot(shooter.normal, front_centroid - shooter.centroid) < receiver_radius;
-    double from_receiver = 0.0;
-    if (front_area > 0.0) {
-      from_receiver = facing_close ? receiver_average(shooter, crosses ? std::span<const Vec3>(front_) : polygon,
-                                                      front_centroid, receiver_normal)
-                                   : unoccluded_factor(front_centroid, receiver_normal, shooter.polygon, local_,
-                                                       clipped_);
-    }
+    if (found_[k].state == Shaped::kLeft) continue;
+    const std::uint32_t i = receiver_at(k);
     near_.push_back(i);
-    shaped_.push_back(seen * from_receiver * front_area / shooter.area);
+    shaped_.push_back(found_[k].value);
     back_end_total += ff[i];
-    shaped_total += shaped_.back();
+    shaped_total += found_[k].value;
   }
   if (whole_shot) {
     if (!(shaped_total > 0.0)) {

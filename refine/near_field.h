@@ -53,6 +53,8 @@
 #include "aarad/core/quadrature.h"
 #include "aarad/formfactor/backend.h"
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -154,15 +156,30 @@ class NearFieldCorrection {
   std::vector<std::uint32_t> near_;
   std::vector<std::uint8_t> near_flag_;  // per receiver: 1 while it is in near_ (all 0 between calls)
   std::vector<double> shaped_;  // per near receiver: G
-  std::vector<Vec3> local_, clipped_, front_;
-  // The factor with nothing occluding from the patch to `polygon`, averaged over the patch by ever finer rules.
-  double patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon);
+  // One thread's room for shaping receivers: polygons in a frame, clipped, and the part in front of the patch; the
+  // rule over a receiver.
+  struct Scratch {
+    std::vector<Vec3> local, clipped, front;
+    std::vector<AreaSample> receiver_points;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch_;
+  // Per receiver looked at by shape(), in its order: what shaping found (shape_receiver).
+  struct Shaped {
+    enum : std::uint8_t { kLeft, kShaped, kFromPatch } state = kLeft;
+    double value = 0.0;  // G; for kFromPatch the fraction seen, which the patch's average multiplies
+  };
+  std::vector<Shaped> found_;
+  Shaped shape_receiver(const NearFieldShooter& shooter, const formfactor::ReceiverView& receivers, std::uint32_t i,
+                        std::span<const double> ff, double near_squared, double size, Scratch& scratch) const;
+  // The factor with nothing occluding from the patch to `polygon`, averaged over the patch by ever finer rules
+  // (patch_points_, made before).
+  double patch_average(const NearFieldShooter& shooter, std::span<const Vec3> polygon, Scratch& scratch) const;
   // The factor with nothing occluding from `part` of a receiver (its centroid and unit normal given) to the patch,
   // averaged over the part by ever finer rules from its centroid on, which stop when two agree.
-  double receiver_average(const NearFieldShooter& shooter, std::span<const Vec3> part, const Vec3& centroid,
-                          const Vec3& normal);
-  std::vector<AreaSample> receiver_points_;  // receiver_average's rule
-  // The rules over the shooting patch, by level, each made when a large receiver first needs it.
+  static double receiver_average(const NearFieldShooter& shooter, std::span<const Vec3> part, const Vec3& centroid,
+                                 const Vec3& normal, Scratch& scratch);
+  // The rules over the shooting patch, by level: made in one go when a large receiver needs them, then read by the
+  // threads that shape.
   std::vector<std::vector<AreaSample>> patch_points_;
 };
 
