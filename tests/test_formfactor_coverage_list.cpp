@@ -449,10 +449,48 @@ TEST(FormfactorCoverageList, APlaneOrderPutsTheFloorBehindAWallAfterIt) {
   end_walk.walk(end, [&](std::uint32_t r, double v) { ordered[r] = v; }, FloorBehindTheWall{});
   EXPECT_DOUBLE_EQ(ordered[1], 0.3);
   EXPECT_DOUBLE_EQ(end_walk.covered(), 1.0);
-  // Two faces meeting at a convex edge each lie behind the other's plane: neither hides the other, and the
-  // recurrence walks the layer as before.
+  // Two faces meeting at a convex edge each lie behind the other's plane: neither hides the other, and they lie
+  // side by side (here the first two fill the pixel, as in the recurrence).
   CoverageWalk().walk(list, [&](std::uint32_t r, double v) { ordered[r] = v; }, EachBehindTheOther{});
   EXPECT_EQ(ordered, plain);
+}
+
+struct NeitherBehind {  // a wall and a ceiling meeting at the room's inner corner
+  static constexpr bool kActive = true;
+  PlaneSide side(std::uint32_t, std::uint32_t) const { return PlaneSide::kNotBehind; }
+  double cell_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>) const { return 1.0; }
+  double hidden_part(std::uint32_t, std::span<const std::uint32_t>, std::span<const std::uint32_t>,
+                     std::span<const CoverageEntry>) const {
+    return 1.0;
+  }
+};
+
+// A wall and a ceiling tile meeting in a pixel of a side face's bottom row, seen at grazing incidence from a lamp just
+// under the ceiling; the tile's corner, written with 6 digits, lies a little above the wall's long edge, so their
+// coverages add up to 1.00012, over the slack (figures of such a pixel at N = 300, rounded). The recurrence gave the
+// tile 0.4 x 0.40012 of the pixel and lost the rest of it to the hemicube's sky. Told that neither lies behind the
+// other's plane (nor, at a convex edge, each behind the other's), the walk puts them side by side: the pixel is
+// covered, the tile gets what the wall leaves.
+TEST(FormfactorCoverageList, SurfacesHidingNeitherLieSideBySideWhenRoundingOverfillsTheirLayer) {
+  const std::vector<CoverageEntry> list = {{1.50, 0.6, 0, 0, 0.01f}, {1.51, 0.40012, 1, 1, 2.7f}};
+  std::vector<double> got(2, -1.0);
+  CoverageWalk plain;
+  plain.walk(list, [&](std::uint32_t r, double v) { got[r] = v; });
+  EXPECT_DOUBLE_EQ(got[0], 0.6);
+  EXPECT_DOUBLE_EQ(got[1], 0.40012 * 0.4);
+  EXPECT_LT(plain.covered(), 0.77);
+  for (const bool convex : {false, true}) {
+    CoverageWalk walk;
+    const auto emit = [&](std::uint32_t r, double v) { got[r] = v; };
+    if (convex) {
+      walk.walk(list, emit, EachBehindTheOther{});
+    } else {
+      walk.walk(list, emit, NeitherBehind{});
+    }
+    EXPECT_DOUBLE_EQ(got[0], 0.6);
+    EXPECT_DOUBLE_EQ(got[1], 0.4);
+    EXPECT_DOUBLE_EQ(walk.covered(), 1.0);
+  }
 }
 
 // The wall's end in the pixel: of the floor behind the wall's plane, the part the wall does not cover in the image
