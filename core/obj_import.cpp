@@ -80,8 +80,8 @@ std::string clean_text(std::istream& in, const std::string& path) {
     text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   } catch (const std::ios_base::failure&) {
     const int reason = errno;
-    throw InputError(path, 0, std::string("cannot read the file (") + (reason != 0 ? std::strerror(reason) : "read error") +
-                                  ")");
+    throw InputError(path, 0, std::string("cannot read the file (") +
+                                  (reason != 0 ? std::strerror(reason) : "read error") + ")");
   }
   if (in.bad()) throw InputError(path, 0, "cannot read the file (read error)");
   if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
@@ -698,9 +698,9 @@ std::vector<Vec3> checked_face(const std::vector<Vec3>& face, const std::string&
 // A face is planar when its vertices lie within `weld` of its plane: the distance within which the scene takes
 // faces for one plane (Scene::build_surfaces) and the meshing moves points onto their surface's plane, kPlaneDistance
 // of the scene's diagonal. A tolerance of the face's own size split faces that only the file's rounding bent: a
-// generated room (not in the repository) turned off the axes and written with 6 significant digits had quads 2.2e-6 off their planes, 1.9e-6 of their
-// size, in a scene 6.4 across; its lamp, cut in two triangles, was meshed along their diagonal, and the ceiling 0.01
-// above it split into 8 763 leaves where the planar lamp left 732 (test
+// generated room (not in the repository) turned off the axes and written with 6 significant digits had quads 2.2e-6
+// off their planes, 1.9e-6 of their size, in a scene 6.4 across; its lamp, cut in two triangles, was meshed along
+// their diagonal, and the ceiling 0.01 above it split into 8 763 leaves where the planar lamp left 732 (test
 // SceneImport.import_face_bent_by_the_files_rounding_is_kept_whole). A face bent more is split into triangles by ear
 // clipping its projection, with a warning.
 std::vector<std::vector<Vec3>> planar_pieces(std::vector<Vec3> face, double deviation, double weld,

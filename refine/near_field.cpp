@@ -299,8 +299,9 @@ void NearFieldCorrection::shape(const NearFieldShooter& shooter, const formfacto
   const std::span<const std::uint32_t> among = listed ? std::span<const std::uint32_t>(listed_) : subset;
   const std::size_t count = every ? receivers.size() : among.size();
   const auto receiver_at = [&](std::size_t k) { return every ? static_cast<std::uint32_t>(k) : among[k]; };
-  // Each receiver depends on the shot alone, so they are shaped in parallel (the exact factors over a receiver or
-  // the patch took a fifth of the office's serial time); the totals are then added in the receivers' order, as one
+  // Each receiver depends on the shot alone, so they are shaped in parallel (on one thread, the exact factors over a
+  // receiver or the patch took 930 of the 8 315 samples the office's main thread spent outside parallel loops:
+  // docs/benchmarks.md, "The office's main thread"); the totals are then added in the receivers' order, as one
   // thread would, so the numbers do not depend on the threads.
   found_.resize(count);
   std::atomic<bool> from_patch{false};

@@ -467,8 +467,8 @@ struct NeitherBehind {  // a wall and a ceiling meeting at the room's inner corn
 
 // A wall and a ceiling tile meeting in a pixel of a side face's bottom row, seen at grazing incidence from a lamp just
 // under the ceiling; the tile's corner, written with 6 digits, lies a little above the wall's long edge, so their
-// coverages add up to 1.00012, over the slack (figures of such a pixel at N = 300, rounded). The recurrence gave the
-// tile 0.4 x 0.40012 of the pixel and lost the rest of it to the hemicube's sky. Told that neither lies behind the
+// coverages add up to 1.00012, over the slack (such a pixel at N = 300 had 0.5914 and 0.4087, adding up to 1.000107).
+// The recurrence gave the tile 0.4 x 0.40012 of the pixel and lost the rest of it to the hemicube's sky. Told that neither lies behind the
 // other's plane (nor, at a convex edge, each behind the other's), the walk puts them side by side: the pixel is
 // covered, the tile gets what the wall leaves.
 TEST(FormfactorCoverageList, SurfacesHidingNeitherLieSideBySideWhenRoundingOverfillsTheirLayer) {
